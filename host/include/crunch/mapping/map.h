@@ -1,0 +1,52 @@
+// The result of a mapping run: the map file contract of ARCHITECTURE.md §4 as C++ values.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
+#include "crunch/mapping/shapelet.h"
+#include "crunch/scene/scene.h"
+
+namespace crunch {
+
+struct MapTable {
+  Pose2 pose;  // theta meaningful modulo pi
+  double width = kStandardTableWidth;
+  double depth = kStandardTableDepth;
+  double leg = kStandardLegSide;
+  double score = 0.0;  // fused map only: support, see mapping/fused_map.h
+  int support = 0;     // fused map only: number of per-pose MAPs in the cluster
+};
+
+struct MapWall {
+  Vec2 a, b;
+  double score = 0.0;
+};
+
+// One pose's independent MAP_t (eq. 27).
+struct PoseMap {
+  Pose2 pose;
+  int shapelets = 0;  // new shapelets sensed at this pose
+  std::vector<MapTable> tables;
+};
+
+struct MapStats {
+  int poses = 0;
+  int skipped_poses = 0;
+  int shapelets = 0;
+  int rejected_reports = 0;  // non-finite or out-of-range reports, never entered the blackboard
+  long long proposals = 0;
+  double wall_s = 0.0;
+};
+
+struct Map {
+  std::vector<MapTable> tables;  // the fused map
+  std::vector<MapWall> walls;    // none yet: walls are not modelled (paper's future work)
+  std::vector<PoseMap> per_pose;
+  std::vector<Shapelet> shapelets;  // every shapelet of the run, for pictures
+  MapStats stats;
+};
+
+}  // namespace crunch

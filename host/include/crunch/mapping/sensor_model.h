@@ -1,0 +1,34 @@
+// The sensor-model interface: what the robot reports at one pose. The ray model (sim/) finds
+// contacts with ODE rays and adds the Gaussian noise of eqs. 4-5; a later issue plugs in bending
+// whiskers and the real classifiers behind the same interface.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "crunch/core/geometry.h"
+#include "crunch/core/rng.h"
+#include "crunch/mapping/shapelet.h"
+
+namespace crunch {
+
+// Noise regimes of ARCHITECTURE.md §4.
+struct NoiseRegime {
+  std::string name = "realistic";
+  double sigma_r = 0.005;           // metres
+  double sigma_phi = kPi / 32.0;    // radians
+
+  static NoiseRegime ideal() { return {"ideal", 0.0, 0.0}; }
+  static NoiseRegime realistic() { return {"realistic", 0.005, kPi / 32.0}; }
+  static NoiseRegime noisy() { return {"noisy", 0.025, kPi / 8.0}; }
+};
+
+class SensorModel {
+ public:
+  virtual ~SensorModel() = default;
+  // Appends to `out` the reports of one body whisk at `pose`. Uses `rng` for all noise.
+  virtual void sense(const Pose2& pose, Rng& rng, std::vector<ContactReport>& out) = 0;
+  virtual const std::vector<WhiskerMount>& mounts() const = 0;
+};
+
+}  // namespace crunch

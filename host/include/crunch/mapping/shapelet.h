@@ -1,0 +1,50 @@
+// Contact reports and shapelets (paper eqs. 4-6). A whisker reports an egocentric radial
+// distance r along the whisker and a surface orientation phi; with the robot's (exact) pose the
+// report becomes an allocentric shapelet S(x, y, phi, tau).
+#pragma once
+
+#include <vector>
+
+#include "crunch/core/geometry.h"
+
+namespace crunch {
+
+// One whisker's mount on the robot, in the robot frame.
+struct WhiskerMount {
+  Vec2 base;         // follicle position, metres
+  double bearing;    // direction the whisker points, radians from the robot's +x
+  double length;     // external length, metres
+};
+
+// The four horizontal front whiskers of the paper's mapping experiment (§2.2). Bases on the
+// front rim of the 0.33 m Create-sized body at bearings -45, -15, +15, +45 degrees, pointing
+// radially outward, 0.14 m external length. See docs/DESIGN.md for why these bearings.
+std::vector<WhiskerMount> defaultWhiskerArray();
+
+inline constexpr double kRobotRadius = 0.165;  // Create-sized cylinder, 0.33 m diameter
+
+// An egocentric contact report from one whisker (eqs. 4-5).
+struct ContactReport {
+  int whisker = 0;    // index into the whisker array
+  double r = 0.0;     // radial distance from the base along the whisker, metres
+  double phi = 0.0;   // surface orientation in the robot frame, radians, modulo pi
+  Pose2 robot;        // robot pose when the report was taken (exact: zero odometry noise)
+};
+
+// An allocentric shapelet (the observation node of the blackboard).
+struct Shapelet {
+  double x = 0.0, y = 0.0;
+  double phi = 0.0;     // surface orientation, modulo pi
+  double tau = 1.0;     // texture; all surfaces have tau = 1 in the present system
+  double ox = 0.0, oy = 0.0;  // where it was sensed from (the whisker base): the free side
+  int pose_index = -1;
+  int whisker = -1;
+};
+
+// Converts a report to a shapelet with the report's robot pose. Returns false (and leaves `out`
+// alone) for a non-finite report or one whose r is outside [0, length]: such reports are counted
+// and never enter the blackboard.
+bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mounts,
+                int pose_index, Shapelet& out);
+
+}  // namespace crunch

@@ -1,0 +1,94 @@
+#include "crunch/core/geometry.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace crunch {
+
+PerimeterPoint closestOnPerimeter(const OrientedRect& r, const Vec2& p) {
+  const Vec2 q = r.pose.toLocal(p);
+  const double hx = 0.5 * r.size_x, hy = 0.5 * r.size_y;
+  // Candidate on each face: clamp along the face.
+  const std::array<Vec2, 4> cand = {Vec2{hx, std::clamp(q.y(), -hy, hy)},
+                                    Vec2{std::clamp(q.x(), -hx, hx), hy},
+                                    Vec2{-hx, std::clamp(q.y(), -hy, hy)},
+                                    Vec2{std::clamp(q.x(), -hx, hx), -hy}};
+  PerimeterPoint best;
+  best.distance = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 4; ++i) {
+    const double d = (cand[i] - q).norm();
+    if (d < best.distance) {
+      best.distance = d;
+      best.side = i;
+      best.point = cand[i];
+    }
+  }
+  best.point = r.pose.toWorld(best.point);
+  return best;
+}
+
+namespace {
+// Projects the rectangle onto axis n; returns [min, max].
+std::pair<double, double> project(const std::array<Vec2, 4>& c, const Vec2& n) {
+  double lo = c[0].dot(n), hi = lo;
+  for (int i = 1; i < 4; ++i) {
+    const double v = c[i].dot(n);
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  return {lo, hi};
+}
+}  // namespace
+
+bool overlaps(const OrientedRect& a, const OrientedRect& b) {
+  const double dx = a.pose.x - b.pose.x, dy = a.pose.y - b.pose.y;
+  const double reach = a.circumradius() + b.circumradius();
+  if (dx * dx + dy * dy >= reach * reach) return false;
+  const auto ca = a.corners(), cb = b.corners();
+  const std::array<Vec2, 4> axes = {
+      Vec2{std::cos(a.pose.theta), std::sin(a.pose.theta)},
+      Vec2{-std::sin(a.pose.theta), std::cos(a.pose.theta)},
+      Vec2{std::cos(b.pose.theta), std::sin(b.pose.theta)},
+      Vec2{-std::sin(b.pose.theta), std::cos(b.pose.theta)}};
+  constexpr double kTouch = 1e-9;  // touching faces do not count as overlap
+  for (const Vec2& n : axes) {
+    const auto [alo, ahi] = project(ca, n);
+    const auto [blo, bhi] = project(cb, n);
+    if (ahi <= blo + kTouch || bhi <= alo + kTouch) return false;
+  }
+  return true;
+}
+
+double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+namespace {
+bool segmentsIntersect(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2) {
+  auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };
+  const double d1 = cross(q2 - q1, p1 - q1), d2 = cross(q2 - q1, p2 - q1);
+  const double d3 = cross(p2 - p1, q1 - p1), d4 = cross(p2 - p1, q2 - p1);
+  return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
+}
+}  // namespace
+
+double distanceRectSegment(const OrientedRect& r, const Vec2& a, const Vec2& b) {
+  const Vec2 la = r.pose.toLocal(a);
+  const double hx = 0.5 * r.size_x, hy = 0.5 * r.size_y;
+  if (std::abs(la.x()) <= hx && std::abs(la.y()) <= hy) return 0.0;
+  const auto c = r.corners();
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 4; ++i) {
+    const Vec2& c0 = c[i];
+    const Vec2& c1 = c[(i + 1) % 4];
+    if (segmentsIntersect(a, b, c0, c1)) return 0.0;
+    best = std::min({best, distanceToSegment(c0, a, b), distanceToSegment(a, c0, c1),
+                     distanceToSegment(b, c0, c1)});
+  }
+  return best;
+}
+
+}  // namespace crunch

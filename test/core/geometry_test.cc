@@ -1,0 +1,36 @@
+#include "crunch/core/geometry.h"
+
+#include <catch2/catch.hpp>
+
+using namespace crunch;
+
+TEST_CASE("Geometry: wrapPeriod folds angles into the half-open period", "[core]") {
+  CHECK(wrapPi(3 * kPi) == Approx(-kPi));
+  CHECK(wrapPeriod(kPi, kPi) == Approx(-kPi / 2));
+  CHECK(wrapPeriod(0.1 + kPi, kPi) == Approx(0.1));
+  CHECK(wrapPeriod(-0.1 - kPi / 2, kPi / 2) == Approx(-0.1));
+}
+
+TEST_CASE("Geometry: closest perimeter point names the face it lies on", "[core]") {
+  const OrientedRect r{{1.0, 1.0, kPi / 2}, 0.2, 0.1};  // x-faces now face +-y
+  const auto p = closestOnPerimeter(r, {1.0, 1.5});
+  CHECK(p.side == 0);
+  CHECK(p.distance == Approx(0.4));
+  CHECK(p.point.x() == Approx(1.0));
+  CHECK(p.point.y() == Approx(1.1));
+}
+
+TEST_CASE("Geometry: rectangles overlap only when interiors intersect", "[core]") {
+  const OrientedRect a{{0, 0, 0}, 1.0, 1.0};
+  CHECK(overlaps(a, {{0.9, 0.0, 0.0}, 1.0, 1.0}));
+  CHECK_FALSE(overlaps(a, {{1.0, 0.0, 0.0}, 1.0, 1.0}));  // touching faces
+  CHECK(overlaps(a, {{1.1, 0.0, kPi / 4}, 1.0, 1.0}));    // rotated corner pokes in
+  CHECK_FALSE(overlaps(a, {{1.3, 0.0, kPi / 4}, 1.0, 1.0}));
+}
+
+TEST_CASE("Geometry: distance from rectangle to segment", "[core]") {
+  const OrientedRect a{{0, 0, 0}, 1.0, 1.0};
+  CHECK(distanceRectSegment(a, {1.0, -1.0}, {1.0, 1.0}) == Approx(0.5));
+  CHECK(distanceRectSegment(a, {-1.0, 0.0}, {1.0, 0.0}) == Approx(0.0));
+  CHECK(distanceRectSegment(a, {0.1, 0.1}, {0.2, 0.2}) == Approx(0.0));
+}
