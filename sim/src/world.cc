@@ -1,1 +1,184 @@
-// placeholder until written
+#include "crunch_sim/world.h"
+
+#include <ode/ode.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <mutex>
+
+namespace crunch::sim {
+namespace detail {
+namespace {
+std::mutex g_ode_mutex;
+int g_ode_users = 0;  // guarded by g_ode_mutex
+}  // namespace
+
+OdeLibraryRef::OdeLibraryRef() {
+  std::lock_guard<std::mutex> lock(g_ode_mutex);
+  if (g_ode_users++ == 0) {
+    [[maybe_unused]] const int ok = dInitODE2(0);
+    assert(ok && "dInitODE2 failed");
+    // Collision queries need the collision data set allocated (for the calling thread; this
+    // ODE build keeps it global).
+    [[maybe_unused]] const int allocated = dAllocateODEDataForThread(dAllocateFlagCollisionData);
+    assert(allocated && "dAllocateODEDataForThread failed");
+  }
+}
+
+OdeLibraryRef::~OdeLibraryRef() {
+  std::lock_guard<std::mutex> lock(g_ode_mutex);
+  if (--g_ode_users == 0) dCloseODE();
+}
+
+void SpaceDeleter::operator()(dxSpace* space) const { dSpaceDestroy(space); }
+void GeomDeleter::operator()(dxGeom* geom) const { dGeomDestroy(geom); }
+
+}  // namespace detail
+
+namespace {
+
+constexpr double kBoundaryTolerance = 1e-9;  // metres: a wall "on" the boundary line
+
+// The body probe (see bodyCollides in world.h): a capsule centred half-way up the walls, its
+// caps clear of the floor and of the lowest box top.
+constexpr double kProbeZ = 0.5 * kWallHeight;
+static_assert(kProbeZ - 0.5 * kBodyHeight - kRobotRadius > 0.0, "probe caps must clear the floor");
+static_assert(kProbeZ + 0.5 * kBodyHeight + kRobotRadius < std::min(kWallHeight, kLegHeight),
+              "probe caps must stay below the lowest box top");
+
+struct RayQuery {
+  double best = std::numeric_limits<double>::infinity();
+  dContactGeom contact{};
+};
+
+void rayCallback(void* data, dGeomID o1, dGeomID o2) {
+  auto* q = static_cast<RayQuery*>(data);
+  dContactGeom c;
+  if (dCollide(o1, o2, 1, &c, sizeof(dContactGeom)) > 0 && c.depth < q->best) {
+    q->best = c.depth;
+    q->contact = c;
+  }
+}
+
+void overlapCallback(void* data, dGeomID o1, dGeomID o2) {
+  auto* hit = static_cast<bool*>(data);
+  if (*hit) return;
+  dContactGeom c;
+  if (dCollide(o1, o2, 1, &c, sizeof(dContactGeom)) > 0) *hit = true;
+}
+
+// The outward unit normal of the arena boundary side that wall [a, b] lies on, or zero if the
+// wall is not on the boundary.
+Vec2 boundaryOutward(const WallSpec& w, const Scene& scene) {
+  auto on = [](double u, double v, double line) {
+    return std::abs(u - line) < kBoundaryTolerance && std::abs(v - line) < kBoundaryTolerance;
+  };
+  if (on(w.a.x(), w.b.x(), 0.0)) return {-1.0, 0.0};
+  if (on(w.a.x(), w.b.x(), scene.width)) return {1.0, 0.0};
+  if (on(w.a.y(), w.b.y(), 0.0)) return {0.0, -1.0};
+  if (on(w.a.y(), w.b.y(), scene.depth)) return {0.0, 1.0};
+  return {0.0, 0.0};
+}
+
+}  // namespace
+
+World::World() : space_(dSimpleSpaceCreate(nullptr)) {
+  // geoms_ owns the geoms and destroys them before the space goes.
+  dSpaceSetCleanup(space_.get(), 0);
+  ray_.reset(dCreateRay(nullptr, 1.0));
+  // Only the closest hit matters; ODE applies this to trimeshes, boxes return one contact anyway.
+  dGeomRaySetClosestHit(ray_.get(), 1);
+  body_.reset(dCreateCapsule(nullptr, kRobotRadius, kBodyHeight));  // axis along z
+}
+
+World::~World() = default;
+
+void World::addBox(const OrientedRect& footprint, double height) {
+  dGeomID box = dCreateBox(space_.get(), footprint.size_x, footprint.size_y, height);
+  dGeomSetPosition(box, footprint.pose.x, footprint.pose.y, 0.5 * height);
+  dMatrix3 rot;
+  dRFromAxisAndAngle(rot, 0.0, 0.0, 1.0, footprint.pose.theta);
+  dGeomSetRotation(box, rot);
+  geoms_.emplace_back(box);
+  footprints_.push_back(footprint);
+}
+
+std::unique_ptr<World> World::build(const Scene& scene) {
+  std::unique_ptr<World> world(new World());
+  for (const WallSpec& w : scene.allWalls()) {
+    const Vec2 d = w.b - w.a;
+    const double len = d.norm();
+    if (len < kBoundaryTolerance) continue;  // a point is no wall
+    const double heading = std::atan2(d.y(), d.x());
+    const Vec2 mid = 0.5 * (w.a + w.b);
+    const Vec2 out = boundaryOutward(w, scene);
+    OrientedRect box;
+    if (out.isZero()) {
+      box = {{mid.x(), mid.y(), heading}, len, kWallThickness};
+    } else {
+      // Inner face on the boundary; lengthened by the thickness at both ends so neighbouring
+      // boundary walls close the corners.
+      const Vec2 c = mid + 0.5 * kWallThickness * out;
+      box = {{c.x(), c.y(), heading}, len + 2.0 * kWallThickness, kWallThickness};
+    }
+    world->addBox(box, kWallHeight);
+  }
+  for (const TableSpec& t : scene.tables) {
+    for (const OrientedRect& leg : t.legs()) world->addBox(leg, kLegHeight);
+  }
+  return world;
+}
+
+std::optional<RayHit> World::castRay(Vec2 origin, double heading, double length, double z) const {
+  if (!(length > 0.0) || !std::isfinite(length) || !std::isfinite(heading) || !std::isfinite(z) ||
+      !origin.allFinite()) {
+    return std::nullopt;
+  }
+  const Vec2 dir(std::cos(heading), std::sin(heading));
+  dGeomRaySet(ray_.get(), origin.x(), origin.y(), z, dir.x(), dir.y(), 0.0);
+  dGeomRaySetLength(ray_.get(), length);
+
+  RayQuery q;
+  dSpaceCollide2(ray_.get(), reinterpret_cast<dGeomID>(space_.get()), &q, &rayCallback);
+  if (!std::isfinite(q.best)) return std::nullopt;
+
+  RayHit hit;
+  hit.distance = q.best;
+  hit.point = {q.contact.pos[0], q.contact.pos[1]};
+  // ODE gives the face normal; its sign depends on argument order, so orient it explicitly.
+  Vec2 n(q.contact.normal[0], q.contact.normal[1]);
+  const double norm = n.norm();
+  n = norm > 1e-12 ? Vec2(n / norm) : Vec2(-dir);
+  if (n.dot(dir) > 0.0) n = -n;
+  hit.normal = n;
+  return hit;
+}
+
+bool World::bodyCollides(const Pose2& pose) const {
+  if (!std::isfinite(pose.x) || !std::isfinite(pose.y) || !std::isfinite(pose.theta)) {
+    return true;
+  }
+  dGeomSetPosition(body_.get(), pose.x, pose.y, kProbeZ);
+  bool hit = false;
+  dSpaceCollide2(body_.get(), reinterpret_cast<dGeomID>(space_.get()), &hit, &overlapCallback);
+  return hit;
+}
+
+std::vector<Pose2> World::reachablePoses(const std::vector<Pose2>& candidates, int* skipped) const {
+  std::vector<Pose2> kept;
+  kept.reserve(candidates.size());
+  int removed = 0;
+  for (const Pose2& p : candidates) {
+    if (bodyCollides(p)) {
+      ++removed;
+    } else {
+      kept.push_back(p);
+    }
+  }
+  if (skipped != nullptr) *skipped = removed;
+  return kept;
+}
+
+}  // namespace crunch::sim

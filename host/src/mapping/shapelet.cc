@@ -1,1 +1,58 @@
-// placeholder until written
+#include "crunch/mapping/shapelet.h"
+
+#include <cmath>
+
+namespace crunch {
+namespace {
+
+constexpr double kDeg = kPi / 180.0;
+constexpr double kWhiskerLength = 0.14;  // external length (§2.4: 140 mm of the 160 mm)
+
+// An orientation modulo pi, as a value in [0, pi).
+double wrapHalfTurn(double a) {
+  double w = wrapPeriod(a, kPi);
+  if (w < 0.0) w += kPi;
+  if (w >= kPi) w -= kPi;  // -tiny + pi can round up to pi
+  return w;
+}
+
+bool finite(const Pose2& p) {
+  return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta);
+}
+
+}  // namespace
+
+std::vector<WhiskerMount> defaultWhiskerArray() {
+  std::vector<WhiskerMount> mounts;
+  for (const double deg : {-45.0, -15.0, 15.0, 45.0}) {
+    const double b = deg * kDeg;
+    mounts.push_back({kRobotRadius * Vec2(std::cos(b), std::sin(b)), b, kWhiskerLength});
+  }
+  return mounts;
+}
+
+bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mounts, int pose_index,
+                Shapelet& out) {
+  // A whisker index outside the array is treated like any other malformed report: it is
+  // rejected and counted by the caller, never allowed to crash the mapping loop.
+  if (rep.whisker < 0 || static_cast<size_t>(rep.whisker) >= mounts.size()) return false;
+  const WhiskerMount& m = mounts[static_cast<size_t>(rep.whisker)];
+  if (!std::isfinite(rep.r) || !std::isfinite(rep.phi) || !finite(rep.robot)) return false;
+  if (rep.r < 0.0 || rep.r > m.length) return false;
+
+  const Vec2 along(std::cos(m.bearing), std::sin(m.bearing));
+  const Vec2 contact = rep.robot.toWorld(m.base + rep.r * along);
+  const Vec2 origin = rep.robot.toWorld(m.base);
+
+  out.x = contact.x();
+  out.y = contact.y();
+  out.phi = wrapHalfTurn(rep.phi + rep.robot.theta);
+  out.tau = 1.0;
+  out.ox = origin.x();
+  out.oy = origin.y();
+  out.pose_index = pose_index;
+  out.whisker = rep.whisker;
+  return true;
+}
+
+}  // namespace crunch
