@@ -1,1 +1,79 @@
-// placeholder until written
+#include "crunch/blackboard/factors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace crunch {
+
+double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int* corner) {
+  double best = std::numeric_limits<double>::infinity();
+  int best_i = 0;
+  const Vec2 l = leg.pose.position();
+  for (int i = 0; i < 4; ++i) {
+    const double d2 = (table.toWorld(p.cornerOffset(i)) - l).squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      best_i = i;
+    }
+  }
+  if (corner) *corner = best_i;
+  const double dr = best / (p.sigma_r_leg * p.sigma_r_leg);
+  const double dth = wrapPeriod(table.theta - leg.pose.theta, kPi / 2) / p.sigma_theta_leg;
+  const double dw = (p.leg_side - leg.side) / p.sigma_w;
+  return dr + dth * dth + dw * dw;
+}
+
+double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
+  const OrientedRect outline{leg.pose, leg.side, leg.side};
+  const PerimeterPoint pp = closestOnPerimeter(outline, {s.x, s.y});
+  // Side m's surface runs along the leg's y axis for faces 0 and 2, along x for faces 1 and 3:
+  // f(theta_L) = theta_L + m pi/2 + pi/2 as a line direction.
+  const double side_dir = leg.pose.theta + (pp.side + 1) * (kPi / 2);
+  const double dr = pp.distance / p.sigma_r_shapelet;
+  const double dth = wrapPeriod(side_dir - s.phi, kPi) / p.sigma_theta_shapelet;
+  return dr * dr + dth * dth;
+}
+
+double logLegDensity(double delta_tl, bool has_parent, const ModelParams& p) {
+  const double null_term = std::log(p.c_L);
+  if (!has_parent) return null_term;
+  return logAddExp(null_term, std::log(p.alpha_L) - delta_tl);
+}
+
+double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
+  return std::log(p.alpha_S) - deltaLS(leg, s, p);
+}
+
+double logShapeletDensity(std::span<const double> log_kernels, const ModelParams& p) {
+  double acc = std::log(p.c_S);
+  for (double k : log_kernels) acc = logAddExp(acc, k);
+  return acc;
+}
+
+double logPresenceOdds(double log_density, const ModelParams& p) {
+  constexpr double kMaxP = 1.0 - 1e-9;
+  const double log_p = std::min(std::log(p.delta3) + log_density, std::log(kMaxP));
+  return log_p - std::log1p(-std::exp(log_p));
+}
+
+double logAddExp(double a, double b) {
+  if (a == -std::numeric_limits<double>::infinity()) return b;
+  if (b == -std::numeric_limits<double>::infinity()) return a;
+  return a > b ? a + std::log1p(std::exp(b - a)) : b + std::log1p(std::exp(a - b));
+}
+
+double temperedAcceptance(double delta, double beta) {
+  const double z = beta * delta;
+  if (z >= 0) return 1.0 / (1.0 + std::exp(-z));
+  const double e = std::exp(z);
+  return e / (1.0 + e);
+}
+
+double literalAcceptance(double delta, double beta) {
+  // P(new | mb) = sigmoid(delta); raised to beta in log space.
+  const double log_sig = delta >= 0 ? -std::log1p(std::exp(-delta)) : delta - std::log1p(std::exp(delta));
+  return std::exp(beta * log_sig);
+}
+
+}  // namespace crunch

@@ -1,1 +1,415 @@
-// placeholder until written
+#include "crunch/blackboard/sampler.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sstream>
+
+namespace crunch {
+
+std::string SamplerOptions::validate() const {
+  std::ostringstream why;
+  if (!(0.0 <= r1 && r1 <= r2 && r2 <= r3 && r3 <= 1.0)) why << "need 0 <= r1 <= r2 <= r3 <= 1; ";
+  if (schedule_steps < 1) why << "schedule_steps must be >= 1; ";
+  if (sweeps_per_temperature < 1) why << "sweeps_per_temperature must be >= 1; ";
+  if (!std::isfinite(schedule_log_top) || !std::isfinite(schedule_log_step))
+    why << "schedule must be finite; ";
+  if (!(prime_sigma_r >= 0 && prime_sigma_theta >= 0 && jitter_sigma_r >= 0 &&
+        jitter_sigma_theta >= 0))
+    why << "proposal spreads must be >= 0; ";
+  return why.str();
+}
+
+Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
+    : bb_(board), opt_(options), rng_(rng) {
+  for (int i = opt_.schedule_steps - 1; i >= 0; --i)
+    betas_.push_back(std::exp(opt_.schedule_log_top - opt_.schedule_log_step * i));
+  order_.reserve(4096);
+}
+
+void Sampler::anneal() {
+  for (double beta : betas_) {
+    for (int s = 0; s < opt_.sweeps_per_temperature; ++s) sweep(beta);
+    if (opt_.prune) prune();
+  }
+}
+
+void Sampler::sweep(double beta) {
+  for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
+    if (bb_.slotUsed(slot)) primeLeg(slot, beta);
+
+  order_.clear();
+  for (int32_t id = 0; id < bb_.tableExtent(); ++id)
+    if (bb_.table(id).alive) order_.push_back({true, id});
+  for (int32_t id = 0; id < bb_.legExtent(); ++id)
+    if (bb_.leg(id).alive) order_.push_back({false, id});
+
+  for (const Ref& h : order_) {
+    const double r = rng_.uniform();
+    if (h.is_table) {
+      if (!bb_.table(h.id).alive) continue;
+      if (r < opt_.r1) deathTable(h.id, beta);
+      else if (r < opt_.r3 && r >= opt_.r2) proposeChild(h.id, beta);
+      else jitterTable(h.id, beta);  // tables have only the null parent
+    } else {
+      if (!bb_.leg(h.id).alive) continue;
+      if (r < opt_.r1) deathLeg(h.id, beta);
+      else if (r < opt_.r2) parentChange(h.id, beta);
+      else if (r < opt_.r3) jitterLeg(h.id, beta);  // a leg's children are observations
+      else proposeParent(h.id, beta);
+    }
+  }
+}
+
+void Sampler::begin() {
+  if (audit_) audit_before_ = bb_.totalEnergy();
+}
+
+bool Sampler::decide(double delta, double beta) {
+  if (audit_) {
+    const double err = std::abs((bb_.totalEnergy() - audit_before_) - delta);
+    stats_.audit_max_error = std::max(stats_.audit_max_error, err);
+  }
+  ++stats_.proposals;
+  const double a = opt_.acceptance == Acceptance::kTempered ? temperedAcceptance(delta, beta)
+                                                            : literalAcceptance(delta, beta);
+  const bool ok = rng_.uniform() < a;
+  stats_.accepted += ok;
+  return ok;
+}
+
+int32_t Sampler::sampleParent(const LegHyp& leg, int32_t exclude) {
+  const ModelParams& p = bb_.params();
+  constexpr int kMaxCand = 16;
+  std::array<int32_t, kMaxCand> cand;
+  std::array<double, kMaxCand> weight;
+  int n = 0;
+  cand[n] = kNone;
+  weight[n++] = exclude == kNone ? 0.0 : p.c_L;
+  const double reach = bb_.tableRect({}).circumradius() + p.cornerLinkRadius();
+  const double cut = p.link_sigmas * p.link_sigmas;
+  bb_.tablesNear(leg.pose.position(), reach, [&](int32_t t) {
+    const TableHyp& tab = bb_.table(t);
+    if (t == exclude || !tab.alive || n >= kMaxCand || tab.n_children >= kMaxChildren) return;
+    const double d = deltaTL(tab.pose, leg, p, nullptr);
+    if (d > cut) return;
+    cand[n] = t;
+    weight[n++] = p.alpha_L * std::exp(-d);
+  });
+  double total = 0.0;
+  for (int i = 0; i < n; ++i) total += weight[i];
+  if (total <= 0.0) return exclude;
+  double u = rng_.uniform() * total;
+  for (int i = 0; i < n; ++i) {
+    if ((u -= weight[i]) < 0.0) return cand[i];
+  }
+  return cand[n - 1];
+}
+
+namespace {
+// The inward normal of shapelet s: perpendicular to its surface, pointing away from the whisker
+// that touched it (into the object).
+Vec2 inwardNormal(const Shapelet& s) {
+  const Vec2 n{-std::sin(s.phi), std::cos(s.phi)};
+  return n.dot(Vec2{s.ox - s.x, s.oy - s.y}) > 0 ? Vec2(-n) : n;
+}
+}  // namespace
+
+void Sampler::primeLeg(int slot, double beta) {
+  const ModelParams& p = bb_.params();
+  const Shapelet& s = bb_.shapelet(slot);
+  const double half = 0.5 * p.leg_side;
+  const Vec2 along{std::cos(s.phi), std::sin(s.phi)};
+  const Vec2 in = inwardNormal(s);
+  // Q(pa(S)): a leg whose face passes through the shapelet. Where another shapelet nearby lies on
+  // a perpendicular face, place the leg touching both (a corner fit); otherwise anywhere along
+  // the face.
+  int partner = -1;
+  if (opt_.smart_parent) {
+    IdSet<64> near;
+    bb_.shapeletsNear({s.x, s.y}, near);
+    for (int32_t o : near.span()) {
+      const Shapelet& so = bb_.shapelet(o);
+      if (o == slot || std::abs(wrapPeriod(so.phi - s.phi, kPi)) < kPi / 4) continue;
+      if (std::hypot(so.x - s.x, so.y - s.y) > 2.0 * p.leg_side) continue;
+      if (partner < 0 || rng_.uniform() < 0.5) partner = o;
+    }
+  }
+  Vec2 c;
+  if (partner >= 0) {
+    // Intersect the two faces' centre lines: c = s + half*in + a*along with
+    // (c - s2).in2 = half.
+    const Shapelet& s2 = bb_.shapelet(partner);
+    const Vec2 in2 = inwardNormal(s2);
+    const Vec2 base = Vec2{s.x, s.y} + half * in;
+    const double denom = along.dot(in2);
+    const double a = (half - (base - Vec2{s2.x, s2.y}).dot(in2)) / denom;
+    c = base + std::clamp(a, -half, half) * along;
+  } else {
+    c = Vec2{s.x, s.y} + half * in + rng_.uniform(-half, half) * along;
+  }
+  c += Vec2{rng_.normal(0, opt_.prime_sigma_r), rng_.normal(0, opt_.prime_sigma_r)};
+  LegHyp probe;
+  probe.pose = {c.x(), c.y(), wrapPeriod(s.phi + rng_.normal(0, opt_.prime_sigma_theta), kPi / 2)};
+  probe.side = p.leg_side;
+  const int32_t parent = sampleParent(probe, kNone);
+
+  Touched t;
+  t.tables.add(parent);
+  bb_.shapeletsNear(c, t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  const int32_t id = bb_.addLeg(probe.pose, parent);
+  t.legs.add(id);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) {
+    bb_.killLeg(id);
+    bb_.releaseLeg(id);
+  }
+}
+
+void Sampler::deathLeg(int32_t id, double beta) {
+  Touched t;
+  t.legs.add(id);
+  t.tables.add(bb_.leg(id).parent);
+  bb_.shapeletsNear(bb_.leg(id).pose.position(), t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.killLeg(id);
+  const double e1 = bb_.localEnergy(t);
+  if (decide(e1 - e0, beta)) bb_.releaseLeg(id);
+  else bb_.reviveLeg(id);
+}
+
+void Sampler::deathTable(int32_t id, double beta) {
+  Touched t;
+  t.tables.add(id);
+  const TableHyp& tab = bb_.table(id);
+  for (int i = 0; i < tab.n_children; ++i) t.legs.add(tab.children[i]);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.killTable(id);
+  const double e1 = bb_.localEnergy(t);
+  if (decide(e1 - e0, beta)) bb_.releaseTable(id);
+  else bb_.reviveTable(id);
+}
+
+void Sampler::parentChange(int32_t leg, double beta) {
+  const int32_t old_parent = bb_.leg(leg).parent;
+  const int32_t new_parent = sampleParent(bb_.leg(leg), old_parent);
+  if (new_parent == old_parent) return;
+  Touched t;
+  t.legs.add(leg);
+  t.tables.add(old_parent);
+  t.tables.add(new_parent);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.setParent(leg, new_parent);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) bb_.setParent(leg, old_parent);
+}
+
+void Sampler::jitterLeg(int32_t id, double beta) {
+  const Pose2 old = bb_.leg(id).pose;
+  const Pose2 moved{old.x + rng_.normal(0, opt_.jitter_sigma_r),
+                    old.y + rng_.normal(0, opt_.jitter_sigma_r),
+                    wrapPeriod(old.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi / 2)};
+  Touched t;
+  t.legs.add(id);
+  t.tables.add(bb_.leg(id).parent);
+  bb_.shapeletsNear(old.position(), t.shapelets);
+  bb_.shapeletsNear(moved.position(), t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.moveLeg(id, moved);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) bb_.moveLeg(id, old);
+}
+
+void Sampler::jitterTable(int32_t id, double beta) {
+  const Pose2 old = bb_.table(id).pose;
+  const Pose2 moved{old.x + rng_.normal(0, opt_.jitter_sigma_r),
+                    old.y + rng_.normal(0, opt_.jitter_sigma_r),
+                    wrapPeriod(old.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+  // Half the moves carry the children along rigidly: a table and its legs are tightly coupled
+  // (sigma_r_leg), so moving either alone barely moves the pair at low temperature.
+  const bool rigid = rng_.uniform() < 0.5;
+  Touched t;
+  t.tables.add(id);
+  const TableHyp& tab = bb_.table(id);
+  const int n = tab.n_children;
+  std::array<int32_t, kMaxChildren> kids;
+  std::array<Pose2, kMaxChildren> kid_old;
+  for (int i = 0; i < n; ++i) {
+    kids[static_cast<size_t>(i)] = tab.children[i];
+    kid_old[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
+    t.legs.add(tab.children[i]);
+  }
+  auto carried = [&](const Pose2& leg) {
+    const Vec2 w = moved.toWorld(old.toLocal(leg.position()));
+    return Pose2{w.x(), w.y(), wrapPeriod(leg.theta + moved.theta - old.theta, kPi / 2)};
+  };
+  if (rigid) {
+    for (int i = 0; i < n; ++i) {
+      bb_.shapeletsNear(kid_old[static_cast<size_t>(i)].position(), t.shapelets);
+      bb_.shapeletsNear(carried(kid_old[static_cast<size_t>(i)]).position(), t.shapelets);
+    }
+  }
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.moveTable(id, moved);
+  if (rigid)
+    for (int i = 0; i < n; ++i)
+      bb_.moveLeg(kids[static_cast<size_t>(i)], carried(kid_old[static_cast<size_t>(i)]));
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) {
+    if (rigid)
+      for (int i = 0; i < n; ++i)
+        bb_.moveLeg(kids[static_cast<size_t>(i)], kid_old[static_cast<size_t>(i)]);
+    bb_.moveTable(id, old);
+  }
+}
+
+void Sampler::proposeChild(int32_t table, double beta) {
+  const TableHyp& tab = bb_.table(table);
+  if (tab.n_children >= kMaxChildren) return;
+  std::array<int, 4> missing;
+  int n = 0;
+  for (int c = 0; c < 4; ++c)
+    if (tab.corner_count[static_cast<size_t>(c)] == 0) missing[static_cast<size_t>(n++)] = c;
+  if (n == 0) return;
+  const int corner = missing[rng_.below(static_cast<uint32_t>(n))];
+  const Pose2 pose = {0, 0, wrapPeriod(tab.pose.theta, kPi / 2)};
+  const Vec2 c = tab.pose.toWorld(bb_.params().cornerOffset(corner));
+  Touched t;
+  t.tables.add(table);
+  bb_.shapeletsNear(c, t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  const int32_t id = bb_.addLeg({c.x(), c.y(), pose.theta}, table);
+  t.legs.add(id);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) {
+    bb_.killLeg(id);
+    bb_.releaseLeg(id);
+  }
+}
+
+void Sampler::proposeParent(int32_t leg, double beta) {
+  const ModelParams& p = bb_.params();
+  const LegHyp l = bb_.leg(leg);
+  // The 8 table placements with this leg at a corner: 2 orientations (modulo pi) x 4 corners.
+  std::array<Pose2, 8> place;
+  std::array<double, 8> weight;
+  double total = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const double th = wrapPeriod(l.pose.theta + (k / 4) * (kPi / 2), kPi);
+    const Pose2 frame{0, 0, th};
+    const Vec2 off = frame.toWorld(p.cornerOffset(k % 4));
+    place[static_cast<size_t>(k)] = {l.pose.x - off.x(), l.pose.y - off.y(), th};
+    double w = 1.0;
+    if (opt_.smart_parent) {
+      for (int c = 0; c < 4; ++c) {
+        if (c == k % 4) continue;
+        const Vec2 corner = place[static_cast<size_t>(k)].toWorld(p.cornerOffset(c));
+        bb_.legsNear(corner, p.cornerLinkRadius(), [&](int32_t o) {
+          const LegHyp& ol = bb_.leg(o);
+          if (o != leg && ol.alive &&
+              (ol.pose.position() - corner).squaredNorm() <= std::pow(p.cornerLinkRadius(), 2))
+            w += 8.0;
+        });
+      }
+    }
+    weight[static_cast<size_t>(k)] = w;
+    total += w;
+  }
+  double u = rng_.uniform() * total;
+  int k = 0;
+  while (k < 7 && (u -= weight[static_cast<size_t>(k)]) >= 0.0) ++k;
+  const Pose2 pose = place[static_cast<size_t>(k)];
+
+  // Legs already at the other corners join the new table in the same move, taken from their
+  // old table if they had one; an old table left without legs dies in the same move. This is the
+  // jump between the rival tables T1 and T2 of Fig. 5, which single-hypothesis moves can only
+  // make through a deep valley of two overlapping tables.
+  IdSet<4> adopt;
+  if (opt_.smart_parent) {
+    for (int c = 0; c < 4; ++c) {
+      const Vec2 corner = pose.toWorld(p.cornerOffset(c));
+      bb_.legsNear(corner, p.cornerLinkRadius(), [&](int32_t o) {
+        const LegHyp& ol = bb_.leg(o);
+        if (o != leg && ol.alive &&
+            (ol.pose.position() - corner).squaredNorm() <= std::pow(p.cornerLinkRadius(), 2))
+          adopt.add(o);
+      });
+    }
+  }
+  std::array<int32_t, 4> adopt_parent;
+  Touched t;
+  t.legs.add(leg);
+  t.tables.add(l.parent);
+  for (int i = 0; i < adopt.n; ++i) {
+    adopt_parent[static_cast<size_t>(i)] = bb_.leg(adopt.ids[i]).parent;
+    t.legs.add(adopt.ids[i]);
+    t.tables.add(adopt_parent[static_cast<size_t>(i)]);
+  }
+  // Every child of a touched table is touched too: a table that dies orphans them.
+  for (int32_t tab : t.tables.span())
+    for (int i = 0; i < bb_.table(tab).n_children; ++i) t.legs.add(bb_.table(tab).children[i]);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  const int32_t table = bb_.addTable(pose);
+  bb_.setParent(leg, table);
+  for (int32_t o : adopt.span()) bb_.setParent(o, table);
+  IdSet<8> emptied;
+  for (int32_t tab : t.tables.span()) {
+    if (bb_.table(tab).n_children == 0) {
+      emptied.add(tab);
+      bb_.killTable(tab);
+    }
+  }
+  t.tables.add(table);
+  const double e1 = bb_.localEnergy(t);
+  if (decide(e1 - e0, beta)) {
+    for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
+    return;
+  }
+  for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
+  bb_.setParent(leg, l.parent);
+  for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
+  bb_.killTable(table);
+  bb_.releaseTable(table);
+}
+
+bool Sampler::legDirectlyLinked(int32_t leg) const {
+  IdSet<64> near;
+  bb_.shapeletsNear(bb_.leg(leg).pose.position(), near);
+  return near.n > 0;
+}
+
+void Sampler::prune() {
+  for (int32_t id = 0; id < bb_.tableExtent(); ++id) {
+    const TableHyp& tab = bb_.table(id);
+    if (!tab.alive) continue;
+    bool linked = false;
+    for (int i = 0; i < tab.n_children && !linked; ++i) linked = legDirectlyLinked(tab.children[i]);
+    if (!linked) {
+      bb_.killTable(id);
+      bb_.releaseTable(id);
+    }
+  }
+  for (int32_t id = 0; id < bb_.legExtent(); ++id) {
+    const LegHyp& l = bb_.leg(id);
+    if (!l.alive || l.parent != kNone || legDirectlyLinked(id)) continue;
+    bb_.killLeg(id);
+    bb_.releaseLeg(id);
+  }
+}
+
+void Sampler::mapTables(std::vector<Pose2>& out) const {
+  out.clear();
+  for (int32_t id = 0; id < bb_.tableExtent(); ++id)
+    if (bb_.table(id).alive) out.push_back(bb_.table(id).pose);
+}
+
+}  // namespace crunch

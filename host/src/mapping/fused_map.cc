@@ -1,1 +1,90 @@
-// placeholder until written
+#include "crunch/mapping/fused_map.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace crunch {
+
+namespace {
+struct Item {
+  Pose2 pose;
+  bool used = false;
+};
+
+bool near(const Pose2& a, const Pose2& b, const FuseOptions& opt) {
+  return std::hypot(a.x - b.x, a.y - b.y) <= opt.radius &&
+         std::abs(wrapPeriod(a.theta - b.theta, kPi)) <= opt.angle;
+}
+
+// Mean pose of `members`; angles modulo pi averaged as doubled angles on the circle.
+Pose2 meanPose(const std::vector<Item>& items, const std::vector<size_t>& members) {
+  double x = 0, y = 0, c = 0, s = 0;
+  for (size_t i : members) {
+    x += items[i].pose.x;
+    y += items[i].pose.y;
+    c += std::cos(2 * items[i].pose.theta);
+    s += std::sin(2 * items[i].pose.theta);
+  }
+  const double n = static_cast<double>(members.size());
+  double th = 0.5 * std::atan2(s, c);
+  if (th < 0) th += kPi;
+  return {x / n, y / n, th};
+}
+}  // namespace
+
+std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const FuseOptions& opt) {
+  std::vector<Item> items;
+  for (const PoseMap& pm : per_pose)
+    for (const MapTable& t : pm.tables) items.push_back({t.pose});
+
+  // Greedy: seed each cluster at the item with the most unused neighbours, take its neighbours,
+  // re-centre once on their mean and take the neighbours of the mean.
+  std::vector<MapTable> clusters;
+  std::vector<size_t> members;
+  for (;;) {
+    size_t best = items.size();
+    int best_count = 0;
+    for (size_t i = 0; i < items.size(); ++i) {
+      if (items[i].used) continue;
+      int count = 0;
+      for (const Item& o : items) count += (!o.used && near(items[i].pose, o.pose, opt));
+      if (count > best_count) {
+        best_count = count;
+        best = i;
+      }
+    }
+    if (best == items.size() || best_count < opt.min_support) break;
+    members.clear();
+    for (size_t j = 0; j < items.size(); ++j)
+      if (!items[j].used && near(items[best].pose, items[j].pose, opt)) members.push_back(j);
+    const Pose2 centre = meanPose(items, members);
+    std::vector<size_t> refined;
+    for (size_t j = 0; j < items.size(); ++j)
+      if (!items[j].used && near(centre, items[j].pose, opt)) refined.push_back(j);
+    if (refined.size() >= members.size()) members = refined;
+    for (size_t j : members) items[j].used = true;
+    MapTable t;
+    t.pose = meanPose(items, members);
+    t.support = static_cast<int>(members.size());
+    clusters.push_back(t);
+  }
+
+  // Two tables cannot overlap: keep the better supported one (clusters come best first).
+  std::vector<MapTable> fused;
+  for (const MapTable& c : clusters) {
+    const OrientedRect rc{c.pose, c.width, c.depth};
+    bool clash = false;
+    for (const MapTable& f : fused) clash |= overlaps(rc, {f.pose, f.width, f.depth});
+    if (!clash) fused.push_back(c);
+  }
+
+  for (MapTable& t : fused) {
+    int within = 0;
+    for (const PoseMap& pm : per_pose)
+      within += std::hypot(pm.pose.x - t.pose.x, pm.pose.y - t.pose.y) <= opt.reach;
+    t.score = within > 0 ? std::min(1.0, static_cast<double>(t.support) / within) : 0.0;
+  }
+  return fused;
+}
+
+}  // namespace crunch

@@ -1,0 +1,144 @@
+// The blackboard B (paper §2.7): live table and leg hypotheses, the working memory of recent
+// shapelets, and the log joint of the factor graph of eq. 23 over them.
+//
+// The log joint is
+//   J(B) =  sum_T [ logodds(delta^3 c_T) + m_T log eps_a ]                       (eqs. 7, 24, 28)
+//         + sum_L   logodds(delta^3 p(L | pa(L)))                                (eqs. 9, 13, 17)
+//         + sum_S   log(c_S + sum_L alpha_S exp(-Delta_LS))                       (eqs. 11, 14, 17)
+//         + (#overlapping same-type pairs) log eps_b                             (eq. 25)
+//         + (#leg pairs with the same parent at the same corner) log eps_c       (eq. 26)
+// where logodds(P) = log P - log(1 - P) is each hypothesis' presence against its absence.
+// A move's acceptance needs only the change of J, which localEnergy() computes over the
+// hypotheses and shapelets the move touches: the Markov blankets of eq. 29.
+//
+// Mutations keep the spatial hashes and parent/child links consistent. Killing a hypothesis
+// keeps its record so the move can be undone; release() returns the id to the pool once the
+// move is committed. Nothing here allocates after warm-up (see pool.h, spatial_hash.h).
+// Not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "crunch/blackboard/factors.h"
+#include "crunch/blackboard/hypotheses.h"
+#include "crunch/blackboard/params.h"
+#include "crunch/blackboard/pool.h"
+#include "crunch/blackboard/spatial_hash.h"
+#include "crunch/mapping/shapelet.h"
+
+namespace crunch {
+
+// A small set of ids with fixed capacity (a move touches a handful of hypotheses).
+template <int N>
+struct IdSet {
+  int32_t ids[N];
+  int n = 0;
+  void add(int32_t id) {
+    if (id == kNone || contains(id)) return;
+    if (n < N) ids[n++] = id;
+  }
+  bool contains(int32_t id) const {
+    for (int i = 0; i < n; ++i)
+      if (ids[i] == id) return true;
+    return false;
+  }
+  std::span<const int32_t> span() const { return {ids, static_cast<size_t>(n)}; }
+};
+
+// What a move touches: tables, legs, and working-memory slots of shapelets.
+struct Touched {
+  IdSet<8> tables;
+  IdSet<4 * kMaxChildren> legs;
+  IdSet<64> shapelets;
+};
+
+class Blackboard {
+ public:
+  Blackboard(const ModelParams& params, int working_memory, size_t reserve_hypotheses);
+
+  const ModelParams& params() const { return p_; }
+
+  // ---- Working memory (the queue of the most recent shapelets, §2.7) ----
+  // Adds a shapelet, evicting the oldest when full. Returns its slot.
+  int pushShapelet(const Shapelet& s);
+  void clearShapelets();
+  int workingMemoryCapacity() const { return static_cast<int>(wm_.size()); }
+  int shapeletCount() const { return wm_count_; }
+  bool slotUsed(int slot) const { return wm_used_[static_cast<size_t>(slot)]; }
+  const Shapelet& shapelet(int slot) const { return wm_[static_cast<size_t>(slot)]; }
+  // Adds to `out` the slots of shapelets a leg at `p` could cause (eq. 30).
+  void shapeletsNear(const Vec2& p, IdSet<64>& out) const;
+
+  // ---- Hypotheses ----
+  int32_t addTable(const Pose2& pose);
+  // Adds a leg with the standard side under `parent` (or kNone).
+  int32_t addLeg(const Pose2& pose, int32_t parent);
+  // Removes a table from B; its children become orphans but stay listed in its record so
+  // reviveTable() can re-link them.
+  void killTable(int32_t id);
+  void reviveTable(int32_t id);
+  void killLeg(int32_t id);
+  void reviveLeg(int32_t id);
+  void releaseTable(int32_t id) { tables_.release(id); }
+  void releaseLeg(int32_t id) { legs_.release(id); }
+  // Re-parents a live leg (kNone for the null prior).
+  void setParent(int32_t leg, int32_t parent);
+  void moveTable(int32_t id, const Pose2& pose);
+  void moveLeg(int32_t id, const Pose2& pose);
+
+  const TableHyp& table(int32_t id) const { return tables_[id]; }
+  const LegHyp& leg(int32_t id) const { return legs_[id]; }
+  int32_t tableExtent() const { return tables_.extent(); }
+  int32_t legExtent() const { return legs_.extent(); }
+  int liveTables() const { return live_tables_; }
+  int liveLegs() const { return live_legs_; }
+
+  template <typename F>
+  void tablesNear(const Vec2& c, double radius, F&& f) const {
+    table_hash_.query(c, radius, [&](int32_t id) { f(id); });
+  }
+  template <typename F>
+  void legsNear(const Vec2& c, double radius, F&& f) const {
+    leg_hash_.query(c, radius, [&](int32_t id) { f(id); });
+  }
+
+  // The footprint of a table hypothesis and of a leg (for overlap, eq. 25).
+  OrientedRect tableRect(const Pose2& pose) const { return {pose, p_.table_width, p_.table_depth}; }
+  OrientedRect legRect(const LegHyp& l) const { return {l.pose, l.side, l.side}; }
+
+  // ---- The log joint ----
+  // Sum of every term of J that involves a touched hypothesis or shapelet, each term once.
+  // Touched hypotheses that are dead contribute nothing, so before/after a move differ by the
+  // move's change of J when `t` covers everything whose terms it changes.
+  double localEnergy(const Touched& t) const;
+  // J over the whole blackboard by brute force (tests only: quadratic).
+  double totalEnergy() const;
+
+  // Removes every hypothesis and shapelet.
+  void clear();
+
+ private:
+  void linkChild(int32_t table, int32_t leg);
+  void unlinkChild(int32_t table, int32_t leg);
+  double tableTerms(int32_t id, const Touched& t) const;
+  double legTerms(int32_t id, const Touched& t) const;
+  double shapeletTerm(int slot) const;
+
+  ModelParams p_;
+  Pool<TableHyp> tables_;
+  Pool<LegHyp> legs_;
+  SpatialHash table_hash_;
+  SpatialHash leg_hash_;
+  SpatialHash shapelet_hash_;
+  std::vector<Shapelet> wm_;
+  std::vector<bool> wm_used_;
+  int wm_next_ = 0;
+  int wm_count_ = 0;
+  int live_tables_ = 0;
+  int live_legs_ = 0;
+  double log_eps_a_, log_eps_b_, log_eps_c_, table_odds_;
+};
+
+}  // namespace crunch

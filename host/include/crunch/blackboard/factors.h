@@ -1,0 +1,49 @@
+// The factors of the blackboard's factor graph (paper eqs. 9-12, 17, 24-26, 28), in log space.
+// Pure functions of hypothesis values: no blackboard state, no allocation.
+#pragma once
+
+#include <span>
+
+#include "crunch/blackboard/hypotheses.h"
+#include "crunch/blackboard/params.h"
+#include "crunch/mapping/shapelet.h"
+
+namespace crunch {
+
+// Delta_TL of eq. 10 for leg `leg` under table `table`; `corner` receives the argmin corner i.
+// The angle term compares the leg's square outline, so it is taken modulo pi/2.
+double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int* corner);
+
+// Delta_LS of eq. 12: squared perimeter distance and side-angle error (modulo pi, since a
+// surface orientation is a line direction) of shapelet `s` against the leg. tau terms vanish:
+// every surface has tau = 1 in the present system.
+double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p);
+
+// log p(L | parent) with the leg caused by a mixture of its parent and the null prior (eq. 9,
+// eq. 13 combined by eq. 17): log(c_L + alpha_L exp(-Delta_TL)); log c_L without a parent.
+double logLegDensity(double delta_tl, bool has_parent, const ModelParams& p);
+
+// log of the kernel alpha_S exp(-Delta_LS) of eq. 11.
+double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams& p);
+
+// log p(S | pa(S)) by the continuous noisy-OR of eq. 17: log(c_S + sum_j kernel_j), from the
+// kernels' logs.
+double logShapeletDensity(std::span<const double> log_kernels, const ModelParams& p);
+
+// log P(H) - log P(not H) for a hypothesis whose density under its parents is exp(log_density):
+// P(H) = delta^3 p (eq. 28). This is the hypothesis' own factor in the Markov-blanket
+// conditional of eq. 29. P(H) is capped just below one.
+double logPresenceOdds(double log_density, const ModelParams& p);
+
+// log(exp(a) + exp(b)) without overflow.
+double logAddExp(double a, double b);
+
+// Acceptance probability of a move that changes the log joint by `delta` at inverse temperature
+// beta: the annealed Gibbs conditional of eq. 29, P(new)^beta / (P(new)^beta + P(old)^beta).
+double temperedAcceptance(double delta, double beta);
+
+// The literal reading of eq. 29, P^beta(new | mb) with P the untempered conditional. Kept as an
+// option; see docs/BLACKBOARD.md for why it is not the default.
+double literalAcceptance(double delta, double beta);
+
+}  // namespace crunch

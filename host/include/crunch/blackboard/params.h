@@ -1,0 +1,56 @@
+// Parameters of the hierarchical table -> leg -> shapelet model (paper §2.6, §3.3).
+// Defaults are the paper's; where the paper is ambiguous the choice is documented here and in
+// docs/BLACKBOARD.md, and every value is an option.
+#pragma once
+
+#include "crunch/core/geometry.h"
+
+namespace crunch {
+
+struct ModelParams {
+  // Null priors (eqs. 7, 13, 14). Densities, not normalised.
+  double c_T = 0.4;
+  double c_L = 0.1;
+  double c_S = 0.05;
+  // Scale of the causal densities p(L|T) = alpha_L exp(-Delta_TL) (eq. 9) and
+  // p(S|L) = alpha_S exp(-Delta_LS) (eq. 11). The paper does not give them; 1 makes a perfectly
+  // placed child 1/c times likelier under its parent than under the null prior.
+  double alpha_L = 1.0;
+  double alpha_S = 1.0;
+  // Penalty factors (eqs. 24-26): missing legs, same-type overlap, two legs at one corner.
+  double eps_a = 0.3;
+  double eps_b = 0.1;
+  double eps_c = 0.1;
+  // Spreads of eqs. 10 and 12. The paper's sigma_r = 0.2 is read in units of the leg side
+  // (0.05 m), the unit that also maps its sensor-noise figures (0.1, 0.5) onto the architecture's
+  // 5 mm / 25 mm regimes: sigma_r = 0.2 * 0.05 m = 0.01 m. See docs/BLACKBOARD.md.
+  double sigma_r_leg = 0.01;           // leg centre vs table corner, metres (eq. 10)
+  double sigma_theta_leg = kPi / 32;   // leg vs table angle (eq. 10)
+  double sigma_r_shapelet = 0.01;      // shapelet vs leg perimeter, metres (eq. 12)
+  double sigma_theta_shapelet = kPi / 32;  // shapelet vs leg side angle (eq. 12)
+  double sigma_w = 0.01;               // leg side vs table's leg side (eq. 10)
+  // delta^3 of eq. 28: the probability mass of one hypothesis is delta3 * density.
+  double delta3 = 0.4;
+  // The one table model of §2.8: fixed size, all hypotheses share it.
+  double table_width = 0.80;
+  double table_depth = 0.50;
+  double leg_side = 0.05;
+  // Eq. 30: a parent or child farther than this many sigmas is treated as unrelated
+  // (its density is below exp(-link_sigmas^2 / 1) ~ 1e-16 of the peak).
+  double link_sigmas = 6.0;
+
+  // Offset of corner i's leg centre in the table frame (legs flush in the corners),
+  // corner order (+x+y, -x+y, -x-y, +x-y).
+  Vec2 cornerOffset(int i) const {
+    const double hx = 0.5 * (table_width - leg_side), hy = 0.5 * (table_depth - leg_side);
+    return {(i == 0 || i == 3) ? hx : -hx, (i < 2) ? hy : -hy};
+  }
+  // Radius within which a shapelet can be caused by a leg (eq. 30).
+  double shapeletLinkRadius() const {
+    return 0.5 * leg_side * std::sqrt(2.0) + link_sigmas * sigma_r_shapelet;
+  }
+  // Radius within which a leg centre can belong to a table corner (eq. 30).
+  double cornerLinkRadius() const { return link_sigmas * sigma_r_leg; }
+};
+
+}  // namespace crunch

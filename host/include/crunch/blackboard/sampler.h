@@ -1,0 +1,116 @@
+// The annealed, blackboard-inspired Metropolis-Hastings sampler of paper Algorithm 1 (§2.7).
+//
+// Each annealing step: every shapelet in working memory proposes a parent leg (priming); every
+// hypothesis then proposes, by a uniform draw r, its death (r < r1), a parent change (r < r2),
+// a child (r < r3) or a parent (otherwise); finally hypotheses linked to no shapelet, directly
+// or through a common ancestor, are pruned. Slots that mean nothing for a type (a table has only
+// the null parent; a leg's children are observations) propose a small pose move instead, so
+// hypotheses can refine their pose rather than only die and be reborn (docs/BLACKBOARD.md).
+// A move is accepted with the annealed Markov-blanket conditional of eq. 29, computed from the
+// change of the log joint (blackboard.h).
+//
+// After warm-up a call to anneal() performs no heap allocation (test/blackboard counts them).
+// Deterministic for a given Rng state. Not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "crunch/blackboard/blackboard.h"
+#include "crunch/core/rng.h"
+
+namespace crunch {
+
+enum class Acceptance {
+  kTempered,  // P(new)^b / (P(new)^b + P(old)^b): the annealed Gibbs conditional (default)
+  kLiteral,   // P(new | mb)^b, eq. 29 read literally
+};
+
+struct SamplerOptions {
+  // Annealing schedule beta_i = exp(schedule_log_top - schedule_log_step * i), visited from
+  // i = schedule_steps - 1 down to 0: the paper's beta_i = exp(7.5 - 0.5 i) run as a cooling,
+  // from beta = 1 (the posterior itself) to beta = e^7.5 ~ 1808 (close to its mode).
+  double schedule_log_top = 7.5;
+  double schedule_log_step = 0.5;
+  int schedule_steps = 16;
+  int sweeps_per_temperature = 1;
+  // Thresholds r1 < r2 < r3 of Algorithm 1.
+  double r1 = 0.1;
+  double r2 = 0.4;
+  double r3 = 0.7;
+  Acceptance acceptance = Acceptance::kTempered;
+  // Q(pa(S)): a leg behind the touched surface, anywhere along a face, with this jitter.
+  double prime_sigma_r = 0.003;
+  double prime_sigma_theta = kPi / 64;
+  // Pose moves.
+  double jitter_sigma_r = 0.01;
+  double jitter_sigma_theta = kPi / 90;
+  // Q(pa(L)): weight each of the 8 table placements that put the leg at a corner by the legs
+  // already near its other corners, and let the new table adopt those orphan legs in the same
+  // move (the paper's "smart proposals", §4). Off: uniform over the 8 placements, no adoption.
+  bool smart_parent = true;
+  bool prune = true;
+
+  // Empty when valid, else what is wrong.
+  std::string validate() const;
+};
+
+struct SamplerStats {
+  long long proposals = 0;
+  long long accepted = 0;
+  // With setAudit(true): the largest |local change - brute-force change| of the log joint seen
+  // over all moves. Tests use it to prove each move's Markov blanket is complete.
+  double audit_max_error = 0.0;
+};
+
+class Sampler {
+ public:
+  Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng);
+
+  // Runs the whole annealing schedule on the blackboard's current working memory.
+  void anneal();
+  // One pass of Algorithm 1's inner loop at inverse temperature beta (without pruning).
+  void sweep(double beta);
+  // Removes hypotheses linked to no shapelet directly or via a common ancestor.
+  void prune();
+
+  // MAP_t (eq. 27): the live tables after annealing.
+  void mapTables(std::vector<Pose2>& out) const;
+
+  const SamplerStats& stats() const { return stats_; }
+  const std::vector<double>& schedule() const { return betas_; }
+  // Checks every move's local energy change against totalEnergy() (slow: tests only).
+  void setAudit(bool on) { audit_ = on; }
+
+ private:
+  struct Ref {
+    bool is_table;
+    int32_t id;
+  };
+  void begin();
+  bool decide(double delta, double beta);
+  void primeLeg(int slot, double beta);
+  void deathTable(int32_t id, double beta);
+  void deathLeg(int32_t id, double beta);
+  void parentChange(int32_t leg, double beta);
+  void jitterTable(int32_t id, double beta);
+  void jitterLeg(int32_t id, double beta);
+  void proposeChild(int32_t table, double beta);
+  void proposeParent(int32_t leg, double beta);
+  bool legDirectlyLinked(int32_t leg) const;
+  // Samples a parent for a leg at `leg` among tables with a corner near it and the null prior,
+  // weighted by their densities (eq. 9 vs eq. 13); `exclude` is never chosen.
+  int32_t sampleParent(const LegHyp& leg, int32_t exclude);
+
+  Blackboard& bb_;
+  SamplerOptions opt_;
+  Rng& rng_;
+  SamplerStats stats_;
+  std::vector<double> betas_;
+  std::vector<Ref> order_;
+  bool audit_ = false;
+  double audit_before_ = 0.0;
+};
+
+}  // namespace crunch

@@ -1,0 +1,29 @@
+// The fused map: one best answer from the collation of independent per-pose MAP_t (eq. 27).
+//
+// The paper stops at the collation (Fig. 11-13). A table that is really there is inferred again
+// and again from the poses that can touch it, while a misplaced rival (the T2 of Fig. 5) or a
+// wall-induced phantom changes with the viewpoint. So: cluster the per-pose tables (centre within
+// `radius`, angle within `angle` modulo pi), keep clusters that at least `min_support` poses
+// agree on, average each cluster (circular mean of doubled angles), and where two kept tables
+// overlap keep the better supported one (two tables cannot share space: eq. 25's constraint).
+// A fused table's score is its support divided by the number of inferring poses within reach of
+// it (robot centre within `reach` of its centre): the fraction of poses that could have seen it
+// and did. See docs/BLACKBOARD.md.
+#pragma once
+
+#include <vector>
+
+#include "crunch/mapping/map.h"
+
+namespace crunch {
+
+struct FuseOptions {
+  double radius = 0.10;                // metres
+  double angle = 10.0 * kPi / 180.0;  // radians, modulo pi
+  int min_support = 3;                // per-pose MAPs that must agree
+  double reach = 0.9;                 // metres: robot centres that could touch the table
+};
+
+std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const FuseOptions& opt);
+
+}  // namespace crunch

@@ -1,0 +1,51 @@
+// Counts heap allocations to prove the sampler's sweep allocates nothing after warm-up
+// (ARCHITECTURE.md §3). Its own executable: it replaces the global operator new.
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <new>
+
+#include "crunch/blackboard/sampler.h"
+#include "test_builders.h"
+
+namespace {
+long long g_allocations = 0;
+}
+
+void* operator new(std::size_t n) {
+  ++g_allocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace crunch;
+
+TEST_CASE("Sampler: anneal() performs no heap allocation after warm-up", "[blackboard]") {
+  ModelParams p;
+  Blackboard bb(p, 7, 1024);
+  Rng rng(8);
+  Sampler sampler(bb, {}, rng);
+  const std::vector<Pose2> tables = {{1, 1, 0.2}, {2.2, 1.1, 1.0}, {1.5, 2.5, 2.0}, {3, 3, 0.7}};
+  std::vector<Shapelet> stream;
+  for (int round = 0; round < 3; ++round)
+    for (const Pose2& t : tables)
+      for (const auto& s : crunch::testing::TableShapelets(t, p, {0, 1, 2, 3})) stream.push_back(s);
+  // Warm-up: the first pass over the stream.
+  const size_t warm = stream.size() / 3;
+  for (size_t i = 0; i < warm; ++i) {
+    bb.pushShapelet(stream[i]);
+    if (i % 4 == 3) sampler.anneal();
+  }
+  long long during = 0;
+  for (size_t i = warm; i < stream.size(); ++i) {
+    bb.pushShapelet(stream[i]);
+    if (i % 4 == 3) {
+      const long long before = g_allocations;
+      sampler.anneal();
+      during += g_allocations - before;
+    }
+  }
+  CHECK(sampler.stats().proposals > 1000);
+  CHECK(during == 0);
+}

@@ -1,0 +1,91 @@
+#include "crunch/blackboard/factors.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+#include "test_builders.h"
+
+using namespace crunch;
+
+namespace {
+constexpr double kTight = 1e-12;  // pure arithmetic: only rounding differs
+}
+
+TEST_CASE("Factors: Delta_TL (eq. 10) against a hand-computed value", "[blackboard]") {
+  const ModelParams p;
+  LegHyp leg;
+  // Corner 0's leg centre is (0.375, 0.225); move it 1 cm (one sigma) and turn it half a sigma.
+  leg.pose = {0.385, 0.225, kPi / 64};
+  int corner = -1;
+  CHECK(deltaTL({0, 0, 0}, leg, p, &corner) == Approx(1.0 + 0.25).epsilon(kTight));
+  CHECK(corner == 0);
+  // A quarter turn of the leg is the same square: no angle penalty.
+  leg.pose = {-0.375, -0.225, kPi / 2};
+  CHECK(deltaTL({0, 0, 0}, leg, p, &corner) == Approx(0.0).margin(kTight));
+  CHECK(corner == 2);
+}
+
+TEST_CASE("Factors: Delta_LS (eq. 12) uses perimeter distance and the touched side", "[blackboard]") {
+  const ModelParams p;
+  LegHyp leg;
+  leg.pose = {0, 0, 0};
+  Shapelet s;
+  s.x = 0.030;  // 5 mm outside the +x face: half a sigma
+  s.y = 0.0;
+  s.phi = kPi / 2;  // the +x face runs along y
+  CHECK(deltaLS(leg, s, p) == Approx(0.25).epsilon(kTight));
+  s.phi = kPi / 2 + kPi / 32;  // one sigma of angle
+  CHECK(deltaLS(leg, s, p) == Approx(1.25).epsilon(kTight));
+  s.phi = -kPi / 2;  // a line: the same orientation
+  CHECK(deltaLS(leg, s, p) == Approx(0.25).epsilon(kTight));
+  s.x = 0.0;  // on the +y face, which runs along x
+  s.y = 0.025;
+  s.phi = kPi;
+  CHECK(deltaLS(leg, s, p) == Approx(0.0).margin(kTight));
+}
+
+TEST_CASE("Factors: leg and shapelet densities mix parent and null prior (eqs. 9, 13, 17)",
+          "[blackboard]") {
+  const ModelParams p;
+  CHECK(logLegDensity(1.25, true, p) == Approx(std::log(0.1 + std::exp(-1.25))).epsilon(kTight));
+  CHECK(logLegDensity(1.25, false, p) == Approx(std::log(0.1)).epsilon(kTight));
+  const std::vector<double> k = {-0.5, -2.0};
+  CHECK(logShapeletDensity(k, p) ==
+        Approx(std::log(0.05 + std::exp(-0.5) + std::exp(-2.0))).epsilon(kTight));
+  CHECK(logShapeletDensity({}, p) == Approx(std::log(0.05)).epsilon(kTight));
+}
+
+TEST_CASE("Factors: eq. 17 is the small-delta limit of discrete noisy-OR (eqs. 18-21)",
+          "[blackboard]") {
+  const std::vector<double> dens = {0.7, 2.5, 0.05, 1.3};
+  double sum = 0;
+  for (double d : dens) sum += d;
+  for (double delta3 : {1e-2, 1e-4, 1e-6}) {
+    double none = 1.0;
+    for (double d : dens) none *= 1.0 - delta3 * d;
+    const double noisy_or = (1.0 - none) / delta3;
+    // The neglected terms are O(delta^6): relative error shrinks linearly in delta^3.
+    CHECK(std::abs(noisy_or - sum) / sum < 10.0 * delta3);
+  }
+}
+
+TEST_CASE("Factors: presence odds use delta^3 (eq. 28)", "[blackboard]") {
+  const ModelParams p;
+  CHECK(logPresenceOdds(std::log(0.4), p) == Approx(std::log(0.16 / 0.84)).epsilon(kTight));
+  // A density too large for delta^3 is capped below probability one, never NaN.
+  CHECK(std::isfinite(logPresenceOdds(std::log(1e9), p)));
+}
+
+TEST_CASE("Factors: acceptance probabilities of eq. 29", "[blackboard]") {
+  CHECK(temperedAcceptance(0.0, 5.0) == Approx(0.5));
+  CHECK(temperedAcceptance(std::log(3.0), 1.0) == Approx(0.75));
+  CHECK(temperedAcceptance(std::log(3.0), 2.0) == Approx(0.9));
+  CHECK(temperedAcceptance(-std::log(3.0), 2.0) == Approx(0.1));
+  CHECK(temperedAcceptance(-1e6, 1.0) == 0.0);
+  CHECK(temperedAcceptance(1e6, 1.0) == 1.0);
+  CHECK(literalAcceptance(std::log(3.0), 1.0) == Approx(0.75));
+  CHECK(literalAcceptance(std::log(3.0), 2.0) == Approx(0.5625));
+  CHECK(logAddExp(-INFINITY, 1.0) == 1.0);
+  CHECK(logAddExp(std::log(2.0), std::log(3.0)) == Approx(std::log(5.0)));
+}
