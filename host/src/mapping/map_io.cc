@@ -1,1 +1,331 @@
-// placeholder until written
+#include "crunch/mapping/map_io.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <string_view>
+#include <system_error>
+
+namespace crunch {
+
+namespace {
+
+// ordered_json keeps the keys in the contract's order, which makes the file easier to read.
+using Json = nlohmann::ordered_json;
+
+// A table's orientation is meaningful modulo pi; written in [0, pi) so equal tables read alike.
+double normaliseTableTheta(double theta) {
+  double t = std::fmod(theta, kPi);
+  if (t < 0.0) t += kPi;
+  if (t >= kPi) t = 0.0;  // -tiny + pi rounds to pi
+  return t;
+}
+
+}  // namespace
+
+std::string mapToJson(const Map& map) {
+  Json tables = Json::array();
+  for (const MapTable& t : map.tables) {
+    tables.push_back({{"x", t.pose.x},
+                      {"y", t.pose.y},
+                      {"theta", normaliseTableTheta(t.pose.theta)},
+                      {"width", t.width},
+                      {"depth", t.depth},
+                      {"leg", t.leg},
+                      {"score", t.score},
+                      {"support", t.support}});
+  }
+  Json walls = Json::array();
+  for (const MapWall& w : map.walls) {
+    walls.push_back(
+        {{"x0", w.a.x()}, {"y0", w.a.y()}, {"x1", w.b.x()}, {"y1", w.b.y()}, {"score", w.score}});
+  }
+  Json per_pose = Json::array();
+  for (const PoseMap& pm : map.per_pose) {
+    Json pose_tables = Json::array();
+    for (const MapTable& t : pm.tables) {
+      pose_tables.push_back(
+          {{"x", t.pose.x}, {"y", t.pose.y}, {"theta", normaliseTableTheta(t.pose.theta)}});
+    }
+    per_pose.push_back({{"pose", {pm.pose.x, pm.pose.y, pm.pose.theta}},
+                        {"shapelets", pm.shapelets},
+                        {"tables", std::move(pose_tables)}});
+  }
+  const MapStats& s = map.stats;
+  Json doc = {{"schema", kMapSchema},
+              {"tables", std::move(tables)},
+              {"walls", std::move(walls)},
+              {"per_pose", std::move(per_pose)},
+              {"stats",
+               {{"poses", s.poses},
+                {"skipped_poses", s.skipped_poses},
+                {"shapelets", s.shapelets},
+                {"rejected_reports", s.rejected_reports},
+                {"proposals", s.proposals},
+                {"wall_s", s.wall_s}}}};
+  return doc.dump(2) + "\n";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading map.json back.
+
+namespace {
+
+// A validation failure at `path`. It unwinds to parseMapJson and never leaves this file: early
+// returns from every field check would bury the rules in plumbing.
+struct FieldError {
+  std::string path;
+  std::string what;
+};
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw FieldError{path, what};
+}
+
+std::string member(const std::string& path, std::string_view key) {
+  return path.empty() ? std::string(key) : path + "." + std::string(key);
+}
+
+std::string element(const std::string& path, size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+void expectObject(const Json& j, const std::string& path) {
+  if (!j.is_object()) fail(path, std::string("expected an object, got ") + j.type_name());
+}
+
+void expectArray(const Json& j, const std::string& path) {
+  if (!j.is_array()) fail(path, std::string("expected an array, got ") + j.type_name());
+}
+
+double number(const Json& j, const std::string& path) {
+  if (!j.is_number()) fail(path, std::string("expected a number, got ") + j.type_name());
+  const double v = j.get<double>();
+  if (!std::isfinite(v)) fail(path, "expected a finite number");
+  return v;
+}
+
+// A non-negative count that fits in T.
+template <typename T>
+T count(const Json& j, const std::string& path) {
+  const bool ok = j.is_number_unsigned() &&
+                  j.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<T>::max());
+  if (!ok) fail(path, "expected a non-negative integer, got " + j.dump());
+  return static_cast<T>(j.get<uint64_t>());
+}
+
+double requiredNumber(const Json& obj, const std::string& path, std::string_view key) {
+  const auto it = obj.find(key);
+  if (it == obj.end()) fail(member(path, key), "missing (required)");
+  return number(*it, member(path, key));
+}
+
+double optionalNumber(const Json& obj, const std::string& path, std::string_view key,
+                      double fallback) {
+  const auto it = obj.find(key);
+  return it == obj.end() ? fallback : number(*it, member(path, key));
+}
+
+template <typename T>
+T optionalCount(const Json& obj, const std::string& path, std::string_view key) {
+  const auto it = obj.find(key);
+  return it == obj.end() ? T{0} : count<T>(*it, member(path, key));
+}
+
+// The array at doc[key], or an empty one if absent.
+const Json& optionalArray(const Json& doc, std::string_view key) {
+  static const Json kEmpty = Json::array();
+  const auto it = doc.find(key);
+  if (it == doc.end()) return kEmpty;
+  expectArray(*it, std::string(key));
+  return *it;
+}
+
+MapTable parseTable(const Json& j, const std::string& path) {
+  expectObject(j, path);
+  MapTable t;
+  t.pose.x = requiredNumber(j, path, "x");
+  t.pose.y = requiredNumber(j, path, "y");
+  t.pose.theta = requiredNumber(j, path, "theta");
+  t.width = optionalNumber(j, path, "width", kStandardTableWidth);
+  t.depth = optionalNumber(j, path, "depth", kStandardTableDepth);
+  t.leg = optionalNumber(j, path, "leg", kStandardLegSide);
+  t.score = optionalNumber(j, path, "score", 0.0);
+  t.support = optionalCount<int>(j, path, "support");
+  return t;
+}
+
+Map parseMapDocument(const Json& doc) {
+  expectObject(doc, "");
+  const auto schema = doc.find("schema");
+  if (schema == doc.end()) fail("schema", "missing (required)");
+  if (!schema->is_string() || schema->get<std::string>() != kMapSchema) {
+    fail("schema", std::string("expected \"") + kMapSchema + "\", got " + schema->dump());
+  }
+
+  Map map;
+  const Json& tables = optionalArray(doc, "tables");
+  for (size_t i = 0; i < tables.size(); ++i) {
+    map.tables.push_back(parseTable(tables[i], element("tables", i)));
+  }
+
+  const Json& walls = optionalArray(doc, "walls");
+  for (size_t i = 0; i < walls.size(); ++i) {
+    const std::string path = element("walls", i);
+    expectObject(walls[i], path);
+    MapWall w;
+    w.a = {requiredNumber(walls[i], path, "x0"), requiredNumber(walls[i], path, "y0")};
+    w.b = {requiredNumber(walls[i], path, "x1"), requiredNumber(walls[i], path, "y1")};
+    w.score = optionalNumber(walls[i], path, "score", 0.0);
+    map.walls.push_back(w);
+  }
+
+  const Json& per_pose = optionalArray(doc, "per_pose");
+  for (size_t i = 0; i < per_pose.size(); ++i) {
+    const std::string path = element("per_pose", i);
+    const Json& j = per_pose[i];
+    expectObject(j, path);
+    PoseMap pm;
+    const auto pose = j.find("pose");
+    if (pose == j.end()) fail(member(path, "pose"), "missing (required)");
+    expectArray(*pose, member(path, "pose"));
+    if (pose->size() != 3) fail(member(path, "pose"), "expected [x, y, theta]");
+    pm.pose = {number((*pose)[0], element(member(path, "pose"), 0)),
+               number((*pose)[1], element(member(path, "pose"), 1)),
+               number((*pose)[2], element(member(path, "pose"), 2))};
+    pm.shapelets = optionalCount<int>(j, path, "shapelets");
+    const auto pt = j.find("tables");
+    if (pt != j.end()) {
+      expectArray(*pt, member(path, "tables"));
+      for (size_t k = 0; k < pt->size(); ++k) {
+        pm.tables.push_back(parseTable((*pt)[k], element(member(path, "tables"), k)));
+      }
+    }
+    map.per_pose.push_back(std::move(pm));
+  }
+
+  const auto stats = doc.find("stats");
+  if (stats != doc.end()) {
+    expectObject(*stats, "stats");
+    MapStats& s = map.stats;
+    s.poses = optionalCount<int>(*stats, "stats", "poses");
+    s.skipped_poses = optionalCount<int>(*stats, "stats", "skipped_poses");
+    s.shapelets = optionalCount<int>(*stats, "stats", "shapelets");
+    s.rejected_reports = optionalCount<int>(*stats, "stats", "rejected_reports");
+    s.proposals = optionalCount<long long>(*stats, "stats", "proposals");
+    s.wall_s = optionalNumber(*stats, "stats", "wall_s", 0.0);
+  }
+  return map;
+}
+
+// nlohmann's messages start with "[json.exception.parse_error.101] "; the tag means nothing to
+// a user.
+std::string withoutExceptionTag(const std::string& what) {
+  if (what.rfind("[json.exception.", 0) == 0) {
+    const size_t end = what.find("] ");
+    if (end != std::string::npos) return what.substr(end + 2);
+  }
+  return what;
+}
+
+}  // namespace
+
+Result<Map> parseMapJson(const std::string& text, const std::string& source) {
+  Json doc;
+  try {
+    doc = Json::parse(text);
+  } catch (const Json::exception& e) {  // syntax errors and numbers too large for a double
+    return Error{source + ": " + withoutExceptionTag(e.what())};
+  }
+  try {
+    return parseMapDocument(doc);
+  } catch (const FieldError& e) {
+    // An empty path is the document itself.
+    return Error{source + ": " + (e.path.empty() ? "(document)" : e.path) + ": " + e.what};
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Files.
+
+namespace {
+
+// Owns a POSIX file descriptor; closes it on destruction unless closed explicitly.
+class FileDescriptor {
+ public:
+  explicit FileDescriptor(int fd) : fd_(fd) {}
+  ~FileDescriptor() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  FileDescriptor(const FileDescriptor&) = delete;
+  FileDescriptor& operator=(const FileDescriptor&) = delete;
+
+  int get() const { return fd_; }
+  // Closes now and returns close()'s result: on some file systems a failed write first shows
+  // here.
+  int close() {
+    const int r = ::close(fd_);
+    fd_ = -1;
+    return r;
+  }
+
+ private:
+  int fd_;
+};
+
+}  // namespace
+
+Status writeFileAtomic(const std::string& path, const std::string& content) {
+  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+  // Reads errno before unlink() can change it.
+  auto failure = [&](const char* step) -> Status {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    return Error{path + ": cannot write file: " + step + ": " + std::strerror(err)};
+  };
+
+  FileDescriptor fd(::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  if (fd.get() < 0) return failure("creating temporary file");
+  const char* data = content.data();
+  size_t left = content.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd.get(), data, left);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return failure("writing");
+    }
+    data += n;
+    left -= static_cast<size_t>(n);
+  }
+  if (::fsync(fd.get()) != 0) return failure("syncing");
+  if (fd.close() != 0) return failure("closing");
+  if (::rename(tmp.c_str(), path.c_str()) != 0) return failure("renaming into place");
+
+  // Make the rename itself durable. Best effort only: the new file is already in place, and
+  // some file systems refuse to sync a directory.
+  std::string dir = std::filesystem::path(path).parent_path().string();
+  if (dir.empty()) dir = ".";
+  FileDescriptor dir_fd(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  if (dir_fd.get() >= 0) ::fsync(dir_fd.get());
+  return okStatus();
+}
+
+Status ensureDirectory(const std::string& dir) {
+  if (dir.empty()) return Error{"output directory: the name is empty"};
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return Error{dir + ": cannot create directory: " + ec.message()};
+  if (!std::filesystem::is_directory(dir, ec)) {
+    return Error{dir + ": cannot create directory: exists and is not a directory"};
+  }
+  return okStatus();
+}
+
+}  // namespace crunch

@@ -20,7 +20,7 @@ struct Evaluation {
   int true_tables = 0;
   int fused_tables = 0;
   int matched = 0;          // fused tables matched one-to-one to real ones (greedy by distance)
-  double precision = 0.0;   // matched / fused (1 when the map is empty and so is the scene)
+  double precision = 0.0;   // matched / fused (1 when the map is empty: nothing claimed wrongly)
   double recall = 0.0;      // matched / true (1 when the scene has no tables)
   double f1 = 0.0;
   double mean_position_error = 0.0;  // metres, over matches

@@ -45,9 +45,14 @@ struct Scene {
 // Margin between the arena boundary and the outermost grid poses, metres.
 inline constexpr double kPoseGridMargin = 0.3;
 
+// Most candidate poses a scene file may ask for (guards against a typo allocating gigabytes).
+inline constexpr long kMaxScenePoses = 1'000'000;
+
 // Evenly spaced poses: nx * ny positions inside the arena with kPoseGridMargin, each with
 // ntheta compass headings starting at 0. Visiting order: row by row in y, then x, then heading,
-// so consecutive poses share a location (the paper's 10x10x4 trajectory, Fig. 6).
+// so consecutive poses share a location (the paper's 10x10x4 trajectory, Fig. 6). A count of 1
+// along an axis puts that coordinate at the centre; an arena narrower than twice the margin
+// shrinks the margin. Requires nx, ny, ntheta > 0.
 std::vector<Pose2> poseGrid(double width, double depth, int nx, int ny, int ntheta);
 
 // The built-in default arena: 4 x 4 m, walls, six standard tables, pose grid 10x10x4.
