@@ -1,1 +1,566 @@
-// placeholder until written
+#include "crunch/render/map_render.h"
+
+#include <cairo-svg.h>
+#include <cairo.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <set>
+#include <utility>
+#include <vector>
+
+namespace crunch {
+
+int MapCanvas::arenaWidthPx() const { return static_cast<int>(std::lround(width_m_ * ppm_)); }
+int MapCanvas::arenaDepthPx() const { return static_cast<int>(std::lround(depth_m_ * ppm_)); }
+int MapCanvas::widthPx() const { return kMarginLeft + arenaWidthPx() + kMarginRight; }
+int MapCanvas::heightPx() const { return kMarginTop + arenaDepthPx() + kMarginBottom; }
+
+Vec2 MapCanvas::toPixel(const Vec2& metres) const {
+  return {kMarginLeft + metres.x() * ppm_, kMarginTop + (depth_m_ - metres.y()) * ppm_};
+}
+
+namespace {
+
+// ---- Cairo handles (STYLE.md item 4) ----------------------------------------------------------
+
+struct SurfaceDeleter {
+  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
+};
+struct ContextDeleter {
+  void operator()(cairo_t* cr) const { cairo_destroy(cr); }
+};
+using SurfacePtr = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
+using ContextPtr = std::unique_ptr<cairo_t, ContextDeleter>;
+
+// Cairo never returns null: a failed creation gives an "error object" whose status says why.
+SurfacePtr makeImageSurface(int width, int height) {
+  return SurfacePtr(cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height));
+}
+SurfacePtr makeSvgSurface(const std::string& file, int width, int height) {
+  return SurfacePtr(cairo_svg_surface_create(file.c_str(), width, height));
+}
+ContextPtr makeContext(cairo_surface_t* surface) { return ContextPtr(cairo_create(surface)); }
+
+// ---- Files -------------------------------------------------------------------------------------
+
+// Cairo's largest image side.
+constexpr int kMaxPicturePx = 32767;
+
+Error pictureError(const std::string& path, const std::string& why) {
+  return Error{"cannot write map picture '" + path + "': " + why};
+}
+
+// The temporary file a picture is drawn into; removed on destruction unless committed, so no
+// failure path can leave a half-written picture behind.
+class TempFile {
+ public:
+  explicit TempFile(std::string final_path) : path_(std::move(final_path)), tmp_(path_ + ".tmp") {}
+  ~TempFile() {
+    if (!committed_) std::remove(tmp_.c_str());
+  }
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+
+  const std::string& tmp() const { return tmp_; }
+
+  // Moves the finished temporary over the final path.
+  Status commit() {
+    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+      return pictureError(
+          path_, std::string("rename from '") + tmp_ + "' failed: " + std::strerror(errno));
+    }
+    committed_ = true;
+    return okStatus();
+  }
+
+ private:
+  std::string path_;
+  std::string tmp_;
+  bool committed_ = false;
+};
+
+Status checkInputs(const Scene& truth, const std::string& path, const RenderOptions& options) {
+  if (path.empty()) return Error{"cannot write map picture: the output path is empty"};
+  if (!std::isfinite(options.pixels_per_metre) || options.pixels_per_metre <= 0) {
+    return pictureError(path, "pixels_per_metre must be finite and > 0, got " +
+                                  std::to_string(options.pixels_per_metre));
+  }
+  if (!std::isfinite(truth.width) || !std::isfinite(truth.depth) || truth.width <= 0 ||
+      truth.depth <= 0) {
+    return pictureError(path, "the arena of scene '" + truth.source + "' has no positive size");
+  }
+  const double w =
+      (truth.width * options.pixels_per_metre) + MapCanvas::kMarginLeft + MapCanvas::kMarginRight;
+  const double h =
+      (truth.depth * options.pixels_per_metre) + MapCanvas::kMarginTop + MapCanvas::kMarginBottom;
+  if (w > kMaxPicturePx || h > kMaxPicturePx) {
+    return pictureError(path, "a " + std::to_string(std::lround(w)) + " x " +
+                                  std::to_string(std::lround(h)) +
+                                  " px picture exceeds cairo's limit of " +
+                                  std::to_string(kMaxPicturePx) + " px; lower pixels_per_metre");
+  }
+  return okStatus();
+}
+
+// ---- Drawing primitives ------------------------------------------------------------------------
+
+struct Rgb {
+  double r, g, b;
+};
+
+// Palette. Red and blue are far apart in hue and both dark enough to read on the grey tops.
+constexpr Rgb kGridMinor{0.91, 0.91, 0.91};
+constexpr Rgb kGridMajor{0.80, 0.80, 0.80};
+constexpr Rgb kTruthTop{0.85, 0.85, 0.85};
+constexpr Rgb kTruthTopEdge{0.62, 0.62, 0.62};
+constexpr Rgb kTruthLeg{0.15, 0.15, 0.15};
+constexpr Rgb kWall{0.0, 0.0, 0.0};
+constexpr Rgb kPoseDot{0.0, 0.0, 0.0};
+constexpr Rgb kPerPose{0.85, 0.0, 0.0};
+constexpr double kPerPoseAlpha = 0.22;  // about five agreeing poses reach near-solid red
+constexpr Rgb kShapeletLine{1.0, 0.62, 0.0};
+constexpr Rgb kShapeletDot{0.80, 0.38, 0.0};
+constexpr Rgb kFused{0.05, 0.30, 0.85};
+constexpr Rgb kText{0.10, 0.10, 0.10};
+
+constexpr double kShapeletLength = 0.04;  // metres, drawn along phi
+
+// Line widths and sizes in pixels: they stay legible whatever the scale.
+constexpr double kWallWidth = 4.0;
+constexpr double kPerPoseWidth = 1.0;
+constexpr double kFusedWidth = 3.0;
+constexpr double kFusedLegWidth = 2.0;
+constexpr double kShapeletWidth = 2.0;
+constexpr double kShapeletDotRadius = 1.25;
+constexpr double kPoseDotRadius = 2.0;
+constexpr double kTitleFontPx = 15.0;
+constexpr double kLabelFontPx = 12.0;
+constexpr double kMinFontPx = 7.0;  // a long title shrinks no further, and is clipped
+
+// A cairo context plus the metres-to-pixels mapping; every layer draws through one.
+class Painter {
+ public:
+  Painter(cairo_t* cr, const MapCanvas& canvas) : cr_(cr), canvas_(canvas) {}
+
+  cairo_t* cr() const { return cr_; }
+  const MapCanvas& canvas() const { return canvas_; }
+
+  void colour(const Rgb& c, double alpha = 1.0) const {
+    cairo_set_source_rgba(cr_, c.r, c.g, c.b, alpha);
+  }
+  void moveTo(const Vec2& m) const {
+    const Vec2 p = canvas_.toPixel(m);
+    cairo_move_to(cr_, p.x(), p.y());
+  }
+  void lineTo(const Vec2& m) const {
+    const Vec2 p = canvas_.toPixel(m);
+    cairo_line_to(cr_, p.x(), p.y());
+  }
+  void rectPath(const OrientedRect& r) const {
+    const auto c = r.corners();
+    moveTo(c[0]);
+    for (int i = 1; i < 4; ++i) lineTo(c[i]);
+    cairo_close_path(cr_);
+  }
+  void dotPath(const Vec2& m, double radius_px) const {
+    const Vec2 p = canvas_.toPixel(m);
+    cairo_new_sub_path(cr_);
+    cairo_arc(cr_, p.x(), p.y(), radius_px, 0.0, 2.0 * kPi);
+  }
+  // Clips to the arena rectangle until the matching restore().
+  void clipToArena() const {
+    cairo_save(cr_);
+    cairo_rectangle(cr_, MapCanvas::kMarginLeft, MapCanvas::kMarginTop, canvas_.arenaWidthPx(),
+                    canvas_.arenaDepthPx());
+    cairo_clip(cr_);
+  }
+  void restore() const { cairo_restore(cr_); }
+
+ private:
+  cairo_t* cr_;
+  MapCanvas canvas_;
+};
+
+enum class Align { kLeft, kCentre, kRight };
+
+// Draws `text` with its baseline at y and its left edge, centre or right edge at x.
+void drawText(const Painter& p, double x, double y, const std::string& text, Align align) {
+  cairo_text_extents_t ext;
+  cairo_text_extents(p.cr(), text.c_str(), &ext);
+  double left = x - ext.x_bearing;
+  if (align == Align::kCentre) left = x - ext.x_bearing - 0.5 * ext.width;
+  if (align == Align::kRight) left = x - ext.x_bearing - ext.width;
+  cairo_move_to(p.cr(), left, y);
+  cairo_show_text(p.cr(), text.c_str());
+}
+
+void setFont(const Painter& p, double size_px, bool bold) {
+  cairo_select_font_face(p.cr(), "sans-serif", CAIRO_FONT_SLANT_NORMAL,
+                         bold ? CAIRO_FONT_WEIGHT_BOLD : CAIRO_FONT_WEIGHT_NORMAL);
+  cairo_set_font_size(p.cr(), size_px);
+}
+
+// Centre of the pixel row/column a 1 px line should sit on to stay crisp.
+double crisp(double px) { return std::floor(px) + 0.5; }
+
+TableSpec asTableSpec(const MapTable& t) { return TableSpec{t.pose, t.width, t.depth, t.leg}; }
+
+// ---- Layers ------------------------------------------------------------------------------------
+
+void drawBackground(const Painter& p) {
+  cairo_set_source_rgb(p.cr(), 1.0, 1.0, 1.0);
+  cairo_paint(p.cr());
+}
+
+// 0.5 m grid; metre lines a shade darker and labelled below and left of the arena.
+void drawGrid(const Painter& p) {
+  const MapCanvas& c = p.canvas();
+  cairo_set_line_width(p.cr(), 1.0);
+  const int half_metres_x = static_cast<int>(std::floor(c.arenaWidth() * 2.0 + 1e-9));
+  const int half_metres_y = static_cast<int>(std::floor(c.arenaDepth() * 2.0 + 1e-9));
+  for (int pass = 0; pass < 2; ++pass) {  // minor lines first so metre lines sit on top
+    const bool major = pass == 1;
+    p.colour(major ? kGridMajor : kGridMinor);
+    for (int i = 0; i <= half_metres_x; ++i) {
+      if ((i % 2 == 0) != major) continue;
+      const double x = crisp(c.toPixel({0.5 * i, 0.0}).x());
+      cairo_move_to(p.cr(), x, c.toPixel({0.0, 0.0}).y());
+      cairo_line_to(p.cr(), x, c.toPixel({0.0, c.arenaDepth()}).y());
+    }
+    for (int j = 0; j <= half_metres_y; ++j) {
+      if ((j % 2 == 0) != major) continue;
+      const double y = crisp(c.toPixel({0.0, 0.5 * j}).y());
+      cairo_move_to(p.cr(), c.toPixel({0.0, 0.0}).x(), y);
+      cairo_line_to(p.cr(), c.toPixel({c.arenaWidth(), 0.0}).x(), y);
+    }
+    cairo_stroke(p.cr());
+  }
+}
+
+void drawAxes(const Painter& p) {
+  const MapCanvas& c = p.canvas();
+  const double tick = 5.0;
+  const Vec2 origin = c.toPixel({0.0, 0.0});
+  setFont(p, kLabelFontPx, false);
+  p.colour(kText);
+  cairo_set_line_width(p.cr(), 1.0);
+  for (int m = 0; m <= static_cast<int>(std::floor(c.arenaWidth() + 1e-9)); ++m) {
+    const double x = crisp(c.toPixel({double(m), 0.0}).x());
+    cairo_move_to(p.cr(), x, origin.y() + kWallWidth / 2);
+    cairo_line_to(p.cr(), x, origin.y() + kWallWidth / 2 + tick);
+    cairo_stroke(p.cr());
+    drawText(p, x, origin.y() + 20.0, std::to_string(m), Align::kCentre);
+  }
+  for (int m = 0; m <= static_cast<int>(std::floor(c.arenaDepth() + 1e-9)); ++m) {
+    const double y = crisp(c.toPixel({0.0, double(m)}).y());
+    cairo_move_to(p.cr(), origin.x() - kWallWidth / 2, y);
+    cairo_line_to(p.cr(), origin.x() - kWallWidth / 2 - tick, y);
+    cairo_stroke(p.cr());
+    drawText(p, origin.x() - 10.0, y + 0.35 * kLabelFontPx, std::to_string(m), Align::kRight);
+  }
+  const double arena_mid_x = origin.x() + 0.5 * c.arenaWidthPx();
+  drawText(p, arena_mid_x, origin.y() + 38.0, "x (m)", Align::kCentre);
+  cairo_save(p.cr());
+  cairo_translate(p.cr(), 18.0, origin.y() - 0.5 * c.arenaDepthPx());
+  cairo_rotate(p.cr(), -0.5 * kPi);
+  drawText(p, 0.0, 0.0, "y (m)", Align::kCentre);
+  cairo_restore(p.cr());
+}
+
+void drawTruthTables(const Painter& p, const Scene& truth) {
+  for (const TableSpec& t : truth.tables) {
+    p.rectPath(t.top());
+    p.colour(kTruthTop);
+    cairo_fill_preserve(p.cr());
+    p.colour(kTruthTopEdge);
+    cairo_set_line_width(p.cr(), 1.0);
+    cairo_stroke(p.cr());
+    for (const OrientedRect& leg : t.legs()) p.rectPath(leg);
+    p.colour(kTruthLeg);
+    cairo_fill(p.cr());
+  }
+}
+
+void drawWalls(const Painter& p, const Scene& truth) {
+  p.colour(kWall);
+  cairo_set_line_width(p.cr(), kWallWidth);
+  cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_SQUARE);
+  // The boundary as one closed path so its corners join cleanly.
+  p.rectPath({{0.5 * truth.width, 0.5 * truth.depth, 0.0}, truth.width, truth.depth});
+  for (const WallSpec& w : truth.walls) {
+    p.moveTo(w.a);
+    p.lineTo(w.b);
+  }
+  cairo_stroke(p.cr());
+  cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_BUTT);
+}
+
+// Robot positions: the poses the map was made from, else the scene's planned poses. Each
+// position is drawn once however many headings it was visited with.
+std::vector<Vec2> uniquePositions(const Map& map, const Scene& truth) {
+  std::vector<Pose2> poses;
+  if (map.per_pose.empty()) {
+    poses = truth.poses;
+  } else {
+    for (const PoseMap& pm : map.per_pose) poses.push_back(pm.pose);
+  }
+  std::set<std::pair<long long, long long>> seen;  // millimetre cells
+  std::vector<Vec2> out;
+  for (const Pose2& pose : poses) {
+    if (!std::isfinite(pose.x) || !std::isfinite(pose.y)) continue;
+    if (seen.insert({std::llround(pose.x * 1000.0), std::llround(pose.y * 1000.0)}).second) {
+      out.push_back(pose.position());
+    }
+  }
+  return out;
+}
+
+void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth) {
+  for (const Vec2& pos : uniquePositions(map, truth)) p.dotPath(pos, kPoseDotRadius);
+  p.colour(kPoseDot);
+  cairo_fill(p.cr());
+}
+
+// A table hypothesis as an outline of its top and its four legs.
+void outlineTable(const Painter& p, const MapTable& t) {
+  const TableSpec spec = asTableSpec(t);
+  p.rectPath(spec.top());
+  for (const OrientedRect& leg : spec.legs()) p.rectPath(leg);
+}
+
+// Each per-pose table is stroked on its own so overlapping outlines compound into darker red
+// where independent poses agree (paper Figs. 11-13).
+void drawPerPoseTables(const Painter& p, const Map& map) {
+  p.colour(kPerPose, kPerPoseAlpha);
+  cairo_set_line_width(p.cr(), kPerPoseWidth);
+  for (const PoseMap& pm : map.per_pose) {
+    for (const MapTable& t : pm.tables) {
+      outlineTable(p, t);
+      cairo_stroke(p.cr());
+    }
+  }
+}
+
+void drawShapelets(const Painter& p, const Map& map) {
+  p.colour(kShapeletLine);
+  cairo_set_line_width(p.cr(), kShapeletWidth);
+  cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_ROUND);
+  for (const Shapelet& s : map.shapelets) {
+    const Vec2 centre{s.x, s.y};
+    const Vec2 half = 0.5 * kShapeletLength * Vec2{std::cos(s.phi), std::sin(s.phi)};
+    p.moveTo(centre - half);
+    p.lineTo(centre + half);
+  }
+  cairo_stroke(p.cr());
+  cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_BUTT);
+  for (const Shapelet& s : map.shapelets) p.dotPath({s.x, s.y}, kShapeletDotRadius);
+  p.colour(kShapeletDot);
+  cairo_fill(p.cr());
+}
+
+void drawFusedTables(const Painter& p, const Map& map) {
+  p.colour(kFused);
+  cairo_set_line_join(p.cr(), CAIRO_LINE_JOIN_ROUND);
+  for (const MapTable& t : map.tables) {
+    const TableSpec spec = asTableSpec(t);
+    cairo_set_line_width(p.cr(), kFusedWidth);
+    p.rectPath(spec.top());
+    cairo_stroke(p.cr());
+    cairo_set_line_width(p.cr(), kFusedLegWidth);
+    for (const OrientedRect& leg : spec.legs()) p.rectPath(leg);
+    cairo_stroke(p.cr());
+  }
+  cairo_set_line_join(p.cr(), CAIRO_LINE_JOIN_MITER);
+}
+
+std::string titleLine(const Map& map, const Scene& truth, const RenderOptions& options) {
+  std::size_t per_pose_tables = 0;
+  for (const PoseMap& pm : map.per_pose) per_pose_tables += pm.tables.size();
+  // The same poses the dots show: the run's, else the scene's plan.
+  const std::size_t poses = map.per_pose.empty() ? truth.poses.size() : map.per_pose.size();
+  std::string line = options.title.empty() ? std::string() : options.title + "   ";
+  line += std::to_string(truth.tables.size()) + " true tables | " + std::to_string(poses) +
+          " poses | " + std::to_string(per_pose_tables) + " per-pose tables | " +
+          std::to_string(map.tables.size()) + " fused | " + std::to_string(map.shapelets.size()) +
+          " shapelets";
+  return line;
+}
+
+// The title line, shrunk to fit when a small arena makes the picture narrow.
+void drawTitle(const Painter& p, const std::string& line) {
+  const double room = p.canvas().widthPx() - MapCanvas::kMarginLeft - 8.0;
+  double size = kTitleFontPx;
+  // Hinted glyph widths do not scale linearly with size, so measure again after each shrink.
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    setFont(p, size, true);
+    cairo_text_extents_t ext;
+    cairo_text_extents(p.cr(), line.c_str(), &ext);
+    if (ext.x_advance <= room || size <= kMinFontPx) break;
+    size = std::max(kMinFontPx, 0.97 * size * room / ext.x_advance);
+  }
+  p.colour(kText);
+  drawText(p, MapCanvas::kMarginLeft, 0.5 * MapCanvas::kMarginTop + 0.35 * kTitleFontPx + 2.0, line,
+           Align::kLeft);
+}
+
+// Legend in the top-right corner, in the margin beside the arena so it hides no data.
+void drawLegend(const Painter& p, const RenderOptions& options) {
+  cairo_t* cr = p.cr();
+  const double x0 = MapCanvas::kMarginLeft + p.canvas().arenaWidthPx() + 18.0;
+  const double row = 24.0;
+  const double icon_w = 30.0, icon_h = 14.0;
+  double y = MapCanvas::kMarginTop + 6.0;  // top of the current row's icon
+
+  const auto label = [&](const char* text) {
+    setFont(p, kLabelFontPx, false);
+    p.colour(kText);
+    drawText(p, x0 + icon_w + 10.0, y + 0.5 * icon_h + 0.35 * kLabelFontPx, text, Align::kLeft);
+    y += row;
+  };
+  const auto tableIcon = [&](double inset) {
+    cairo_rectangle(cr, x0 + inset, y + inset, icon_w - 2 * inset, icon_h - 2 * inset);
+  };
+  const auto legIcons = [&](double side) {
+    cairo_rectangle(cr, x0, y, side, side);
+    cairo_rectangle(cr, x0 + icon_w - side, y, side, side);
+    cairo_rectangle(cr, x0, y + icon_h - side, side, side);
+    cairo_rectangle(cr, x0 + icon_w - side, y + icon_h - side, side, side);
+  };
+
+  tableIcon(0.0);
+  p.colour(kTruthTop);
+  cairo_fill(cr);
+  legIcons(4.0);
+  p.colour(kTruthLeg);
+  cairo_fill(cr);
+  label("ground truth");
+
+  cairo_set_line_width(cr, kWallWidth);
+  p.colour(kWall);
+  cairo_move_to(cr, x0, y + 0.5 * icon_h);
+  cairo_line_to(cr, x0 + icon_w, y + 0.5 * icon_h);
+  cairo_stroke(cr);
+  label("walls");
+
+  cairo_arc(cr, x0 + 0.5 * icon_w, y + 0.5 * icon_h, kPoseDotRadius, 0.0, 2.0 * kPi);
+  p.colour(kPoseDot);
+  cairo_fill(cr);
+  label("robot positions");
+
+  if (options.draw_per_pose) {
+    // Offset outlines show how agreement darkens the red.
+    cairo_set_line_width(cr, kPerPoseWidth);
+    p.colour(kPerPose, kPerPoseAlpha);
+    for (int k = 0; k < 5; ++k) {
+      const double d = (k % 3) * 1.5;
+      cairo_rectangle(cr, x0 + 0.5 + d, y + 0.5 + (k % 2), icon_w - 4.0, icon_h - 2.0);
+      cairo_stroke(cr);
+    }
+    label("per-pose MAP tables");
+  }
+  if (options.draw_shapelets) {
+    cairo_set_line_width(cr, kShapeletWidth);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+    p.colour(kShapeletLine);
+    cairo_move_to(cr, x0 + 0.5 * icon_w - 6.0, y + 0.5 * icon_h + 3.0);
+    cairo_line_to(cr, x0 + 0.5 * icon_w + 6.0, y + 0.5 * icon_h - 3.0);
+    cairo_stroke(cr);
+    cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+    cairo_arc(cr, x0 + 0.5 * icon_w, y + 0.5 * icon_h, kShapeletDotRadius, 0.0, 2.0 * kPi);
+    p.colour(kShapeletDot);
+    cairo_fill(cr);
+    label("shapelets");
+  }
+  if (options.draw_fused) {
+    cairo_set_line_width(cr, kFusedWidth);
+    p.colour(kFused);
+    tableIcon(1.5);
+    cairo_stroke(cr);
+    label("fused map");
+  }
+}
+
+void drawPicture(cairo_t* cr, const MapCanvas& canvas, const Map& map, const Scene& truth,
+                 const RenderOptions& options) {
+  const Painter p(cr, canvas);
+  drawBackground(p);
+  drawGrid(p);
+  drawTruthTables(p, truth);
+  p.clipToArena();  // hypotheses beyond the walls are not drawn over the labels
+  if (options.draw_per_pose) drawPerPoseTables(p, map);
+  p.restore();
+  drawWalls(p, truth);
+  drawPoseGrid(p, map, truth);
+  p.clipToArena();
+  if (options.draw_fused) drawFusedTables(p, map);
+  // Shapelets last: they are the evidence, small, and would vanish under the fused legs.
+  if (options.draw_shapelets) drawShapelets(p, map);
+  p.restore();
+  drawAxes(p);
+  drawTitle(p, titleLine(map, truth, options));
+  drawLegend(p, options);
+}
+
+Error cairoError(const std::string& path, cairo_status_t status) {
+  return pictureError(path, cairo_status_to_string(status));
+}
+
+}  // namespace
+
+Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options) {
+  if (Status s = checkInputs(truth, path, options); !s) return s;
+  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+  TempFile file(path);
+
+  SurfacePtr surface = makeImageSurface(canvas.widthPx(), canvas.heightPx());
+  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  {
+    ContextPtr cr = makeContext(surface.get());
+    drawPicture(cr.get(), canvas, map, truth, options);
+    if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
+      return cairoError(path, st);
+    }
+  }
+  cairo_surface_flush(surface.get());
+  if (cairo_status_t st = cairo_surface_write_to_png(surface.get(), file.tmp().c_str());
+      st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  return file.commit();
+}
+
+Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options) {
+  if (Status s = checkInputs(truth, path, options); !s) return s;
+  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+  // Declared before the surface so the surface (which holds the open temp file) is destroyed,
+  // closing the file, before the temp is removed on a failure path.
+  TempFile file(path);
+
+  SurfacePtr surface = makeSvgSurface(file.tmp(), canvas.widthPx(), canvas.heightPx());
+  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  {
+    ContextPtr cr = makeContext(surface.get());
+    drawPicture(cr.get(), canvas, map, truth, options);
+    if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
+      return cairoError(path, st);
+    }
+  }
+  cairo_surface_finish(surface.get());  // writes the document and closes the temp file
+  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  return file.commit();
+}
+
+}  // namespace crunch

@@ -1,0 +1,73 @@
+// Overhead pictures of a mapping run against its ground truth, in the style of the paper's
+// Fig. 6 (arena, tables, pose grid) and Figs. 11-13 (the collation of every pose's independent
+// MAP_t, eq. 27): overlapping per-pose tables build up darker red where poses agree.
+//
+// Layers, bottom to top: 0.5 m grid with metre ticks, ground-truth tables (grey tops, dark
+// legs), arena boundary and interior walls (thick black), pose grid (black dots), per-pose MAP
+// tables (thin translucent red), fused map (thick blue), shapelets (orange 4 cm strokes along
+// phi, on top so the evidence stays visible). A title line above and a legend in the top-right
+// corner, beside the arena.
+//
+// Files are written atomically: the picture goes to `path + ".tmp"` and is renamed over `path`
+// only when complete, so a failed render never leaves a partial file and never touches an
+// existing one. Functions are thread-safe for distinct paths.
+#pragma once
+
+#include <string>
+
+#include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
+#include "crunch/mapping/map.h"
+#include "crunch/scene/scene.h"
+
+namespace crunch {
+
+struct RenderOptions {
+  double pixels_per_metre = 200;  // arena scale; must be finite and > 0
+  bool draw_shapelets = true;
+  bool draw_per_pose = true;  // the collated per-pose MAP tables (Figs. 11-13)
+  bool draw_fused = true;     // the fused map (Map::tables)
+  std::string title;          // shown before the counts on the title line; may be empty
+};
+
+// Where the arena lands in the picture. The arena occupies width*ppm x depth*ppm pixels (SVG:
+// points) inside fixed margins; arena y points up, so the origin is the arena's bottom-left.
+class MapCanvas {
+ public:
+  static constexpr int kMarginLeft = 56;    // y tick labels and axis caption
+  static constexpr int kMarginRight = 190;  // legend column
+  static constexpr int kMarginTop = 44;     // title line
+  static constexpr int kMarginBottom = 48;  // x tick labels and axis caption
+
+  MapCanvas(double arena_width, double arena_depth, double pixels_per_metre)
+      : width_m_(arena_width), depth_m_(arena_depth), ppm_(pixels_per_metre) {}
+
+  // Picture size: arena size * ppm (rounded) plus the margins.
+  int widthPx() const;
+  int heightPx() const;
+  int arenaWidthPx() const;
+  int arenaDepthPx() const;
+
+  // Arena metres to picture pixels (continuous; pixel (i, j) covers [i, i+1) x [j, j+1)).
+  Vec2 toPixel(const Vec2& metres) const;
+  double ppm() const { return ppm_; }
+  double arenaWidth() const { return width_m_; }
+  double arenaDepth() const { return depth_m_; }
+
+ private:
+  double width_m_;
+  double depth_m_;
+  double ppm_;
+};
+
+// Renders `map` over the ground truth `truth` as a PNG at `path`. Returns an Error naming the
+// path (and cairo's status text) when the options are invalid, the picture would exceed
+// cairo's size limit, or the file cannot be written; no file is left behind in that case.
+Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options = {});
+
+// The same picture as an SVG document (units: points, one per PNG pixel).
+Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options = {});
+
+}  // namespace crunch
