@@ -15,7 +15,7 @@ double wrapHalfTurn(double a) {
   return w;
 }
 
-bool validSigma(double s) { return std::isfinite(s) && s >= 0.0; }
+[[maybe_unused]] bool validSigma(double s) { return std::isfinite(s) && s >= 0.0; }
 
 }  // namespace
 

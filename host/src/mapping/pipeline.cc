@@ -1,10 +1,61 @@
 #include "crunch/mapping/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <limits>
 
 #include "crunch/blackboard/blackboard.h"
 
 namespace crunch {
+
+namespace {
+// The fused map as one inference over every shapelet of the run (the paper's future work of
+// "longer-term memories of shapelets", §4): a blackboard whose working memory holds them all,
+// annealed with the same schedule and `global_sweeps` sweeps per temperature. The spatial hash
+// keeps each move local, so the cost grows with the number of shapelets, not its square.
+std::vector<MapTable> globalMap(Map& map, const MappingOptions& options, Rng& rng) {
+  // Independent chains from the same evidence; the one with the highest log joint wins.
+  std::vector<Pose2> poses;
+  double best = -std::numeric_limits<double>::infinity();
+  for (int chain = 0; chain < std::max(1, options.global_chains); ++chain) {
+    Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
+                     4 * map.shapelets.size() + 64);
+    for (const Shapelet& s : map.shapelets) board.pushShapelet(s);
+    SamplerOptions so = options.sampler;
+    so.sweeps_per_temperature = options.global_sweeps;
+    Sampler sampler(board, so, rng);
+    sampler.anneal();
+    map.stats.proposals += sampler.stats().proposals;
+    const double energy = board.totalEnergy();
+    if (energy > best) {
+      best = energy;
+      sampler.mapTables(poses);
+    }
+  }
+  std::vector<MapTable> out;
+  for (const Pose2& p : poses) {
+    MapTable t;
+    t.pose = p;
+    t.width = options.model.table_width;
+    t.depth = options.model.table_depth;
+    t.leg = options.model.leg_side;
+    out.push_back(t);
+  }
+  // Support: per-pose MAPs that agree with each global table.
+  for (MapTable& t : out) {
+    int within = 0;
+    for (const PoseMap& pm : map.per_pose) {
+      within += std::hypot(pm.pose.x - t.pose.x, pm.pose.y - t.pose.y) <= options.fuse.reach;
+      for (const MapTable& q : pm.tables)
+        t.support += std::hypot(q.pose.x - t.pose.x, q.pose.y - t.pose.y) <= options.fuse.radius &&
+                     std::abs(wrapPeriod(q.pose.theta - t.pose.theta, kPi)) <= options.fuse.angle;
+    }
+    t.score = within > 0 ? std::min(1.0, static_cast<double>(t.support) / within) : 0.0;
+  }
+  return out;
+}
+}  // namespace
 
 Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
                const MappingOptions& options) {
@@ -53,7 +104,11 @@ Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped
   }
   map.stats.shapelets = static_cast<int>(map.shapelets.size());
   map.stats.proposals = sampler.stats().proposals;
-  map.tables = fuseTables(map.per_pose, options.fuse);
+  if (options.global_sweeps > 0 && !map.shapelets.empty()) {
+    map.tables = globalMap(map, options, sample_rng);
+  } else {
+    map.tables = fuseTables(map.per_pose, options.fuse);
+  }
   map.stats.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return map;

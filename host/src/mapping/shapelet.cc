@@ -1,5 +1,6 @@
 #include "crunch/mapping/shapelet.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace crunch {
@@ -24,7 +25,7 @@ bool finite(const Pose2& p) {
 
 std::vector<WhiskerMount> defaultWhiskerArray() {
   std::vector<WhiskerMount> mounts;
-  for (const double deg : {-45.0, -15.0, 15.0, 45.0}) {
+  for (const double deg : {-33.75, -11.25, 11.25, 33.75}) {
     const double b = deg * kDeg;
     mounts.push_back({kRobotRadius * Vec2(std::cos(b), std::sin(b)), b, kWhiskerLength});
   }
@@ -38,10 +39,13 @@ bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mount
   if (rep.whisker < 0 || static_cast<size_t>(rep.whisker) >= mounts.size()) return false;
   const WhiskerMount& m = mounts[static_cast<size_t>(rep.whisker)];
   if (!std::isfinite(rep.r) || !std::isfinite(rep.phi) || !finite(rep.robot)) return false;
-  if (rep.r < 0.0 || rep.r > m.length) return false;
+  // A noisy estimate a little past either end is still a contact on this whisker: the
+  // estimator's answer is clamped to the whisker. One far outside it is not a measurement.
+  if (rep.r < -m.length || rep.r > 2.0 * m.length) return false;
+  const double r = std::clamp(rep.r, 0.0, m.length);
 
   const Vec2 along(std::cos(m.bearing), std::sin(m.bearing));
-  const Vec2 contact = rep.robot.toWorld(m.base + rep.r * along);
+  const Vec2 contact = rep.robot.toWorld(m.base + r * along);
   const Vec2 origin = rep.robot.toWorld(m.base);
 
   out.x = contact.x();

@@ -6,6 +6,9 @@
 //
 // At each pose the robot performs the body whisk of §2.3: it rotates in place at pi/24 rad/s
 // toward and then away, so its heading sweeps theta0 -> theta0 + A -> theta0 - A -> theta0.
+// A = pi/12: two seconds at pi/24 rad/s, the length of the paper's 2 s recording window (§2.5);
+// with the default whisker bearings it makes the 16 whisker directions of a pose's four headings
+// sweep the whole circle (docs/DESIGN.md).
 // Each whisker is a rigid ray of its mount's length from its base along its bearing, in the
 // plane z = Options::z. Over the whisk, the sample with the smallest hit distance — the
 // deepest bend, the paper's peak deflection (eq. 1) — gives the whisker's one report:
@@ -14,7 +17,8 @@
 //         heading at that sample, in [0, pi),
 //   robot the exact pose at that sample (zero odometry noise, §2.8).
 // A whisker that touches nothing during the whisk gives no report. Noise may carry r outside
-// [0, length]; such reports are kept here and rejected (and counted) by toShapelet().
+// [0, length]; such reports are kept here and clamped (or, if absurd, rejected and counted) by
+// toShapelet().
 //
 // Ownership: holds a reference to the World, which must outlive the model.
 // Thread-safety: none (it uses the World's scratch geoms and its own scratch state).
@@ -35,7 +39,7 @@ class RaySensorModel final : public SensorModel {
  public:
   struct Options {
     double z = 0.1;                     // height of the whisker plane above the floor, metres
-    double whisk_amplitude = kPi / 24;  // A: one second at the paper's pi/24 rad/s, radians
+    double whisk_amplitude = kPi / 12;  // A: two seconds at the paper's pi/24 rad/s, radians
     double sweep_step = kPi / 360;      // largest heading step between samples (0.5 deg)
 
     // okStatus(), or an Error naming the bad field.
@@ -64,7 +68,7 @@ class RaySensorModel final : public SensorModel {
   struct Peak {  // the deepest contact so far of one whisker during a whisk
     bool hit = false;
     double distance = 0.0;
-    Vec2 normal;
+    Vec2 normal = Vec2::Zero();
     Pose2 robot;
   };
 

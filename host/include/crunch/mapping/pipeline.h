@@ -21,6 +21,10 @@ struct MappingOptions {
   FuseOptions fuse;
   int working_memory = 7;  // the paper's queue of the seven most recent shapelets
   uint64_t seed = 1;
+  // > 0: the fused map is one annealing over all shapelets with this many sweeps per
+  // temperature (global inference); 0: clustering of the per-pose MAPs (fused_map.h).
+  int global_sweeps = 4;
+  int global_chains = 4;  // independent annealing chains; the highest log joint wins
   // Called after each pose with (poses done, poses total); may be empty.
   std::function<void(int, int)> progress;
 };

@@ -17,8 +17,9 @@ struct WhiskerMount {
 };
 
 // The four horizontal front whiskers of the paper's mapping experiment (§2.2). Bases on the
-// front rim of the 0.33 m Create-sized body at bearings -45, -15, +15, +45 degrees, pointing
-// radially outward, 0.14 m external length. See docs/DESIGN.md for why these bearings.
+// front rim of the 0.33 m Create-sized body at bearings -33.75, -11.25, +11.25, +33.75 degrees,
+// pointing radially outward, 0.14 m external length. Over the four compass headings of a pose
+// the 16 whisker directions are then evenly 22.5 degrees apart (docs/DESIGN.md).
 std::vector<WhiskerMount> defaultWhiskerArray();
 
 inline constexpr double kRobotRadius = 0.165;  // Create-sized cylinder, 0.33 m diameter
@@ -41,9 +42,10 @@ struct Shapelet {
   int whisker = -1;
 };
 
-// Converts a report to a shapelet with the report's robot pose. Returns false (and leaves `out`
-// alone) for a non-finite report or one whose r is outside [0, length]: such reports are counted
-// and never enter the blackboard.
+// Converts a report to a shapelet with the report's robot pose; r is clamped to [0, length]
+// (noise can carry a tip contact past the tip). Returns false (and leaves `out` alone) for a
+// non-finite report, a bad whisker index, or r outside [-length, 2 length]: such reports are
+// counted and never enter the blackboard.
 bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mounts,
                 int pose_index, Shapelet& out);
 
