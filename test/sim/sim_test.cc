@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -74,7 +75,7 @@ RaySensorModel makeSensor(const World& world, std::vector<WhiskerMount> mounts, 
   return RaySensorModel(world, std::move(mounts), std::move(noise), RaySensorModel::Options{});
 }
 
-// A robot whose default whisker #2 (bearing +15 deg) points straight at the centre of the
+// A robot whose default whisker #2 (bearing +11.25 deg) points straight at the centre of the
 // -x face of leg 1 of a table at (2, 2, table_theta), with the whisker base `gap` metres from
 // the face.
 struct FacingLeg {
@@ -105,12 +106,37 @@ FacingLeg makeFacingLeg(double table_theta, double gap) {
 TEST_CASE("Shapelet: default whisker array has four radial whiskers on the body rim", "[sim]") {
   const auto mounts = crunch::defaultWhiskerArray();
   REQUIRE(mounts.size() == 4);
-  const double expected_deg[] = {-45.0, -15.0, 15.0, 45.0};
+  const double expected_deg[] = {-33.75, -11.25, 11.25, 33.75};
   for (size_t i = 0; i < mounts.size(); ++i) {
     CHECK(mounts[i].bearing == Approx(expected_deg[i] * kPi / 180.0));
     CHECK(mounts[i].base.norm() == Approx(kRobotRadius));
     CHECK(std::atan2(mounts[i].base.y(), mounts[i].base.x()) == Approx(mounts[i].bearing));
     CHECK(mounts[i].length == Approx(0.14));
+  }
+}
+
+TEST_CASE("Shapelet: over a pose's four compass headings the 16 whiskers are 22.5 deg apart",
+          "[sim]") {
+  const auto mounts = crunch::defaultWhiskerArray();
+  REQUIRE(mounts.size() == 4);
+  std::vector<double> directions;
+  for (int k = 0; k < 4; ++k) {
+    for (const WhiskerMount& m : mounts) {
+      double d = std::fmod(m.bearing + 0.5 * kPi * k, 2.0 * kPi);
+      if (d < 0.0) d += 2.0 * kPi;
+      directions.push_back(d);
+    }
+  }
+  std::sort(directions.begin(), directions.end());
+  REQUIRE(directions.size() == 16);
+  const double step = 22.5 * kPi / 180.0;
+  for (size_t i = 0; i < directions.size(); ++i) {
+    // The last gap wraps around through 2 pi back to the first direction.
+    const double gap = i + 1 < directions.size()
+                           ? directions[i + 1] - directions[i]
+                           : directions.front() + 2.0 * kPi - directions.back();
+    INFO("gap after direction " << i << " (" << directions[i] * 180.0 / kPi << " deg)");
+    CHECK(gap == Approx(step).margin(1e-12));
   }
 }
 
@@ -143,11 +169,20 @@ TEST_CASE("Shapelet: toShapelet rejects non-finite and out-of-range reports", "[
   rep = good;
   rep.robot.theta = nan;
   CHECK(rejected(rep));
+  // r is a measurement only within [-length, 2 length].
+  const double length = mounts[1].length;
+  REQUIRE(length == Approx(0.14));
   rep = good;
-  rep.r = -1e-4;
+  rep.r = 2.5 * length;
   CHECK(rejected(rep));
   rep = good;
-  rep.r = 0.14 + 1e-4;
+  rep.r = -1.5 * length;
+  CHECK(rejected(rep));
+  rep = good;
+  rep.r = 2.0 * length + 1e-3;
+  CHECK(rejected(rep));
+  rep = good;
+  rep.r = -length - 1e-3;
   CHECK(rejected(rep));
   rep = good;
   rep.whisker = 4;
@@ -164,24 +199,81 @@ TEST_CASE("Shapelet: toShapelet rejects non-finite and out-of-range reports", "[
   CHECK(crunch::toShapelet(rep, mounts, 7, out));
 }
 
+TEST_CASE("Shapelet: toShapelet clamps a noisy r just past either end onto the whisker",
+          "[sim]") {
+  const auto mounts = crunch::defaultWhiskerArray();
+  const WhiskerMount& m = mounts[1];
+  ContactReport rep;
+  rep.whisker = 1;
+  rep.phi = 0.4;
+  rep.robot = {1.0, 1.0, 0.2};
+  // The whisker's base and tip in the arena, computed independently of toShapelet.
+  const Vec2 base = rep.robot.toWorld(m.base);
+  const double heading = rep.robot.theta + m.bearing;
+  const Vec2 tip = base + m.length * Vec2(std::cos(heading), std::sin(heading));
+
+  auto place = [&](double r) {
+    ContactReport rr = rep;
+    rr.r = r;
+    Shapelet s;
+    s.x = s.y = 123.0;
+    const bool ok = crunch::toShapelet(rr, mounts, 3, s);
+    return std::make_pair(ok, s);
+  };
+
+  SECTION("a little past the tip: at the tip") {
+    const auto [ok, s] = place(m.length + 0.01);
+    REQUIRE(ok);
+    CHECK(Vec2(s.x, s.y).isApprox(tip, kGeomTol));
+    CHECK(Vec2(s.ox, s.oy).isApprox(base, kGeomTol));
+    CHECK(s.pose_index == 3);
+    CHECK(s.whisker == 1);
+  }
+  SECTION("a little before the base: at the base") {
+    const auto [ok, s] = place(-0.01);
+    REQUIRE(ok);
+    CHECK(Vec2(s.x, s.y).isApprox(base, kGeomTol));
+    CHECK(Vec2(s.ox, s.oy).isApprox(base, kGeomTol));
+  }
+  SECTION("at the limits of plausibility: still clamped, not rejected") {
+    const auto [ok_far, far] = place(2.0 * m.length);
+    REQUIRE(ok_far);
+    CHECK(Vec2(far.x, far.y).isApprox(tip, kGeomTol));
+    const auto [ok_back, back] = place(-m.length);
+    REQUIRE(ok_back);
+    CHECK(Vec2(back.x, back.y).isApprox(base, kGeomTol));
+  }
+  SECTION("inside the whisker: not clamped") {
+    const auto [ok, s] = place(0.5 * m.length);
+    REQUIRE(ok);
+    CHECK(Vec2(s.x, s.y).isApprox(0.5 * (base + tip), kGeomTol));
+  }
+}
+
 TEST_CASE("Shapelet: a report from a rotated robot lands at the right arena point", "[sim]") {
   const auto mounts = crunch::defaultWhiskerArray();
   ContactReport rep;
-  rep.whisker = 0;  // bearing -45 deg
+  rep.whisker = 0;  // bearing -33.75 deg
   rep.r = 0.05;
   rep.phi = 2.0;
   rep.robot = {1.0, 2.0, 0.5 * kPi};
+  const WhiskerMount& m = mounts[0];
+  REQUIRE(m.bearing == Approx(-33.75 * kPi / 180.0));
 
   Shapelet s;
   REQUIRE(crunch::toShapelet(rep, mounts, 11, s));
-  // In the robot frame the contact is at (R + r)(cos -45, sin -45); turning by +90 degrees
-  // sends (u, -u) to (u, u).
-  const double u = (kRobotRadius + 0.05) / std::sqrt(2.0);
-  const double b = kRobotRadius / std::sqrt(2.0);
-  CHECK(s.x == Approx(1.0 + u).margin(kGeomTol));
-  CHECK(s.y == Approx(2.0 + u).margin(kGeomTol));
-  CHECK(s.ox == Approx(1.0 + b).margin(kGeomTol));
-  CHECK(s.oy == Approx(2.0 + b).margin(kGeomTol));
+  // In the robot frame the base is m.base and the contact m.base + r (cos b, sin b); turning
+  // by +90 degrees sends (u, v) to (-v, u).
+  const Vec2 contact = m.base + rep.r * Vec2(std::cos(m.bearing), std::sin(m.bearing));
+  CHECK(s.x == Approx(1.0 - contact.y()).margin(kGeomTol));
+  CHECK(s.y == Approx(2.0 + contact.x()).margin(kGeomTol));
+  CHECK(s.ox == Approx(1.0 - m.base.y()).margin(kGeomTol));
+  CHECK(s.oy == Approx(2.0 + m.base.x()).margin(kGeomTol));
+  // The whisker is radial, so the contact is R + r from the robot centre, at bearing
+  // b + 90 deg: (R + r)(-sin b, cos b) = (R + r)(0.5556, 0.8315).
+  const double d = kRobotRadius + rep.r;
+  CHECK(s.x == Approx(1.0 + d * std::sin(33.75 * kPi / 180.0)).margin(kGeomTol));
+  CHECK(s.y == Approx(2.0 + d * std::cos(33.75 * kPi / 180.0)).margin(kGeomTol));
   // 2.0 + pi/2 = 3.5708 wraps to 3.5708 - pi = 0.4292, in [0, pi).
   CHECK(s.phi == Approx(2.0 + 0.5 * kPi - kPi).margin(kGeomTol));
   CHECK(s.phi >= 0.0);
@@ -328,14 +420,22 @@ TEST_CASE("World: several worlds coexist and outlive each other", "[sim]") {
 // ---------------------------------------------------------------------------------------------
 // Ray sensor
 
-TEST_CASE("RaySensor: whisk sweeps +-pi/24 in steps of at most the sweep step", "[sim]") {
+TEST_CASE("RaySensor: whisk sweeps +-pi/12 in steps of at most the sweep step", "[sim]") {
+  CHECK(RaySensorModel::Options{}.whisk_amplitude == Approx(kPi / 12));
   const auto world = World::build(makeScene());
   const auto sensor = makeSensor(*world, crunch::defaultWhiskerArray(), NoiseRegime::ideal());
   const auto& offsets = sensor.sweepOffsets();
-  REQUIRE(offsets.size() == 31);  // 7.5 deg / 0.5 deg = 15 steps each way, plus theta0
+  REQUIRE(offsets.size() == 61);  // 15 deg / 0.5 deg = 30 steps each way, plus theta0
   CHECK(offsets.front() == 0.0);
-  CHECK(*std::max_element(offsets.begin(), offsets.end()) == Approx(kPi / 24));
-  CHECK(*std::min_element(offsets.begin(), offsets.end()) == Approx(-kPi / 24));
+  CHECK(*std::max_element(offsets.begin(), offsets.end()) == Approx(kPi / 12));
+  CHECK(*std::min_element(offsets.begin(), offsets.end()) == Approx(-kPi / 12));
+  // Sorted, the sampled headings are evenly spaced no wider than the sweep step.
+  std::vector<double> sorted = offsets;
+  std::sort(sorted.begin(), sorted.end());
+  const double step = RaySensorModel::Options{}.sweep_step;
+  for (size_t i = 1; i < sorted.size(); ++i) {
+    CHECK(sorted[i] - sorted[i - 1] == Approx(step).margin(1e-12));
+  }
   CHECK(RaySensorModel::Options{}.validate().ok());
   RaySensorModel::Options bad;
   bad.sweep_step = 0.0;
