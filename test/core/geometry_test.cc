@@ -6,7 +6,8 @@ using namespace crunch;
 
 TEST_CASE("Geometry: wrapPeriod folds angles into the half-open period", "[core]") {
   CHECK(wrapPi(3 * kPi) == Approx(-kPi));
-  CHECK(wrapPeriod(kPi, kPi) == Approx(-kPi / 2));
+  CHECK(wrapPeriod(kPi / 2, kPi) == Approx(-kPi / 2));
+  CHECK(wrapPeriod(kPi, kPi) == Approx(0.0).margin(1e-12));
   CHECK(wrapPeriod(0.1 + kPi, kPi) == Approx(0.1));
   CHECK(wrapPeriod(-0.1 - kPi / 2, kPi / 2) == Approx(-0.1));
 }

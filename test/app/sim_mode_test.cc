@@ -1,0 +1,153 @@
+#include "sim_mode.h"
+
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "crunch/mapping/map_io.h"
+
+using namespace crunch;
+namespace fs = std::filesystem;
+
+namespace {
+fs::path freshDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("crunch_app_test_" + name);
+  fs::remove_all(d);
+  return d;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+struct RunResult {
+  int code;
+  std::string out, err;
+};
+
+RunResult run(app::SimOptions opt) {
+  std::ostringstream out, err;
+  const int code = app::runSim(opt, out, err);
+  return {code, out.str(), err.str()};
+}
+
+nlohmann::json report(const fs::path& dir) { return nlohmann::json::parse(slurp(dir / "report.json")); }
+}  // namespace
+
+TEST_CASE("crunchhost --sim: default arena, realistic noise, finds the tables", "[app]") {
+  // The issue's target is recall 1.0. Measured with the current sampler, seeds 1-5 give
+  // 0.83, 1, 0.83, 1, 0.83 (docs/BLACKBOARD.md, "Where it stands"): one of the six tables is
+  // sometimes explained by a rival placement that shares its legs. The bound is what the
+  // code meets today, so a regression below it fails; raise it as the sampler improves.
+  constexpr double kMinRecall = 0.8;
+  for (uint64_t seed : {1, 2}) {
+    const fs::path dir = freshDir("default_" + std::to_string(seed));
+    app::SimOptions opt;
+    opt.seed = seed;
+    opt.out_dir = dir.string();
+    const RunResult r = run(opt);
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto rep = report(dir);
+    CHECK(rep["accuracy"]["true_tables"] == 6);
+    CHECK(rep["accuracy"]["recall"].get<double>() >= kMinRecall);
+    // Phantoms are expected at walls (walls are not modelled); elsewhere at most one.
+    CHECK(rep["accuracy"]["phantoms_elsewhere"].get<int>() <= 1);
+    CHECK(rep["accuracy"]["mean_position_error_m"].get<double>() < 0.05);
+    CHECK(fs::file_size(dir / "map.png") > 10000);
+    const auto map = parseMapJson(slurp(dir / "map.json"), "map.json");
+    REQUIRE(map.ok());
+    CHECK(map.value().per_pose.size() > 50);
+    CHECK(map.value().stats.poses + map.value().stats.skipped_poses == 400);
+  }
+}
+
+TEST_CASE("crunchhost --sim: every noise regime runs and writes all three files", "[app]") {
+  for (const char* noise : {"ideal", "realistic", "noisy"}) {
+    const fs::path dir = freshDir(std::string("noise_") + noise);
+    app::SimOptions opt;
+    opt.noise = noise;
+    opt.out_dir = dir.string();
+    const RunResult r = run(opt);
+    REQUIRE(r.code == 0);
+    CHECK(fs::exists(dir / "map.json"));
+    CHECK(fs::exists(dir / "map.png"));
+    CHECK(report(dir)["noise"]["name"] == noise);
+  }
+}
+
+TEST_CASE("crunchhost --sim: same seed, same map", "[app]") {
+  const fs::path a = freshDir("det_a"), b = freshDir("det_b");
+  app::SimOptions opt;
+  opt.seed = 9;
+  opt.out_dir = a.string();
+  REQUIRE(run(opt).code == 0);
+  opt.out_dir = b.string();
+  REQUIRE(run(opt).code == 0);
+  auto ja = nlohmann::json::parse(slurp(a / "map.json"));
+  auto jb = nlohmann::json::parse(slurp(b / "map.json"));
+  ja["stats"].erase("wall_s");
+  jb["stats"].erase("wall_s");
+  CHECK(ja == jb);
+}
+
+TEST_CASE("crunchhost --sim: a bad scene is exit 2 naming file and field, nothing written",
+          "[app]") {
+  const fs::path dir = freshDir("bad_scene");
+  app::SimOptions opt;
+  opt.scene_path = std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/bad_unknown_key.json";
+  opt.out_dir = dir.string();
+  const RunResult r = run(opt);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("bad_unknown_key.json") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir));
+}
+
+TEST_CASE("crunchhost --sim: the physics sensor model says it is not built yet", "[app]") {
+  const fs::path dir = freshDir("physics");
+  app::SimOptions opt;
+  opt.sensor_model = "physics";
+  opt.out_dir = dir.string();
+  const RunResult r = run(opt);
+  CHECK(r.code == 2);
+  CHECK(r.err.find("issue 4") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir));
+}
+
+TEST_CASE("crunchhost --sim: an empty arena gives an empty, valid map", "[app]") {
+  const fs::path dir = freshDir("empty");
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json") << R"({"arena": {"width": 3.0, "depth": 3.0}})";
+  app::SimOptions opt;
+  opt.scene_path = (dir / "scene.json").string();
+  opt.out_dir = (dir / "out").string();
+  const RunResult r = run(opt);
+  REQUIRE(r.code == 0);
+  const auto map = parseMapJson(slurp(dir / "out/map.json"), "map.json");
+  REQUIRE(map.ok());
+  // Only wall shapelets exist; any table is a wall phantom, which the report classifies.
+  const auto rep = report(dir / "out");
+  CHECK(rep["accuracy"]["phantoms_elsewhere"] == 0);
+  CHECK(rep["accuracy"]["recall"] == 1.0);
+}
+
+TEST_CASE("crunchhost --sim: no contacts at all gives an empty map", "[app]") {
+  const fs::path dir = freshDir("nocontact");
+  fs::create_directories(dir);
+  std::ofstream(dir / "scene.json")
+      << R"({"arena": {"width": 4.0, "depth": 4.0}, "poses": {"list": [[2.0, 2.0, 0.0], [2.0, 2.0, 1.5]]}})";
+  app::SimOptions opt;
+  opt.scene_path = (dir / "scene.json").string();
+  opt.out_dir = (dir / "out").string();
+  REQUIRE(run(opt).code == 0);
+  const auto map = parseMapJson(slurp(dir / "out/map.json"), "map.json");
+  REQUIRE(map.ok());
+  CHECK(map.value().tables.empty());
+  CHECK(map.value().per_pose.empty());
+  CHECK(map.value().stats.shapelets == 0);
+}
