@@ -1,5 +1,6 @@
 #include "sim_mode.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -24,8 +25,7 @@ std::optional<NoiseRegime> noiseByName(const std::string& name) {
 }
 
 std::string reportJson(const Scene& scene, const Map& map, const Evaluation& ev,
-                       const SimOptions& opt, const NoiseRegime& noise, double sense_s,
-                       double total_s) {
+                       const SimOptions& opt, const ModelParams& model, const NoiseRegime& noise, double total_s) {
   nlohmann::ordered_json j;
   j["schema"] = "crunch.report/1";
   j["scene"] = scene.source;
@@ -52,15 +52,19 @@ std::string reportJson(const Scene& scene, const Map& map, const Evaluation& ev,
                  {"shapelets", map.stats.shapelets},
                  {"rejected_reports", map.stats.rejected_reports},
                  {"proposals", map.stats.proposals}};
-  j["timings_s"] = {{"sense_and_infer", map.stats.wall_s},
-                    {"sense_only_estimate", sense_s},
-                    {"total", total_s}};
+  j["timings_s"] = {{"sense_and_infer", map.stats.wall_s}, {"total", total_s}};
   const SamplerOptions& s = opt.mapping.sampler;
+  j["model"] = {{"sigma_r_shapelet", model.sigma_r_shapelet},
+                {"sigma_theta_shapelet", model.sigma_theta_shapelet},
+                {"sigma_r_leg", model.sigma_r_leg},
+                {"sigma_theta_leg", model.sigma_theta_leg}};
   j["sampler"] = {{"schedule_steps", s.schedule_steps},
                   {"schedule_log_top", s.schedule_log_top},
                   {"schedule_log_step", s.schedule_log_step},
                   {"sweeps_per_temperature", s.sweeps_per_temperature},
                   {"working_memory", opt.mapping.working_memory},
+                  {"global_sweeps", opt.mapping.global_sweeps},
+                  {"global_chains", opt.mapping.global_chains},
                   {"smart_proposals", s.smart_parent}};
   return j.dump(2) + "\n";
 }
@@ -136,6 +140,9 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   sim::RaySensorModel sensor(*world, defaultWhiskerArray(), *noise, {});
   MappingOptions mopt = opt.mapping;
   mopt.seed = opt.seed;
+  // Eq. 12's sigma_r^S, sigma_theta^S "model sensor noise": never below the regime's own.
+  mopt.model.sigma_r_shapelet = std::max(mopt.model.sigma_r_shapelet, noise->sigma_r);
+  mopt.model.sigma_theta_shapelet = std::max(mopt.model.sigma_theta_shapelet, noise->sigma_phi);
   ProgressBar bar(opt.json_progress ? out : err, opt.json_progress);
   mopt.progress = [&](int done, int total) { bar(done, total); };
   const Map map = runMapping(sensor, poses, skipped, mopt);
@@ -156,7 +163,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
         std::pair{dir + "map.png", renderMapPng(map, scene, dir + "map.png", ropt)},
         std::pair{dir + "report.json",
                   writeFileAtomic(dir + "report.json",
-                                  reportJson(scene, map, ev, opt, *noise, 0.0, total_s))}}) {
+                                  reportJson(scene, map, ev, opt, mopt.model, *noise, total_s))}}) {
     if (!status) {
       err << "crunchhost: " << status.error().message << "\n";
       return 1;
