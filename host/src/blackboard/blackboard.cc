@@ -6,6 +6,13 @@
 namespace crunch {
 
 namespace {
+// Buckets: at least 4096, and about two per expected item, so distinct cells rarely share one
+// as the floor grows (docs/BENCHMARKS.md: a fixed 4096 doubled the cost per proposal at 1e4).
+int log2Buckets(size_t expected) {
+  int b = 12;
+  while (b < 24 && (size_t{1} << b) < 2 * expected) ++b;
+  return b;
+}
 // Cell sides: about the reach of the look-ups each hash serves.
 constexpr double kTableCell = 0.5;
 constexpr double kLegCell = 0.1;
@@ -16,9 +23,9 @@ Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t res
     : p_(params),
       tables_(reserve),
       legs_(reserve),
-      table_hash_(kTableCell),
-      leg_hash_(kLegCell),
-      shapelet_hash_(kShapeletCell),
+      table_hash_(kTableCell, log2Buckets(reserve), 4),
+      leg_hash_(kLegCell, log2Buckets(reserve), 4),
+      shapelet_hash_(kShapeletCell, log2Buckets(static_cast<size_t>(working_memory)), 4),
       wm_(static_cast<size_t>(working_memory)),
       wm_used_(static_cast<size_t>(working_memory), false),
       log_eps_a_(std::log(params.eps_a)),
