@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <ostream>
 
@@ -158,13 +159,16 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   ropt.title = "crunchhost --sim, noise " + noise->name + ", seed " + std::to_string(opt.seed);
   const double total_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  for (const auto& [path, status] :
-       {std::pair{dir + "map.json", writeFileAtomic(dir + "map.json", mapToJson(map))},
-        std::pair{dir + "map.png", renderMapPng(map, scene, dir + "map.png", ropt)},
-        std::pair{dir + "report.json",
-                  writeFileAtomic(dir + "report.json",
-                                  reportJson(scene, map, ev, opt, mopt.model, *noise, total_s))}}) {
-    if (!status) {
+  // Stop at the first failure: a later file is not written after an earlier one failed.
+  const std::function<Status()> writes[] = {
+      [&] { return writeFileAtomic(dir + "map.json", mapToJson(map)); },
+      [&] { return renderMapPng(map, scene, dir + "map.png", ropt); },
+      [&] {
+        return writeFileAtomic(dir + "report.json",
+                               reportJson(scene, map, ev, opt, mopt.model, *noise, total_s));
+      }};
+  for (const auto& write : writes) {
+    if (const Status status = write(); !status) {
       err << "crunchhost: " << status.error().message << "\n";
       return 1;
     }

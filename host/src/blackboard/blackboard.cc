@@ -91,12 +91,17 @@ int32_t Blackboard::addLeg(const Pose2& pose, int32_t parent) {
   return id;
 }
 
+int Blackboard::nearestCorner(const Pose2& table, const LegHyp& leg) const {
+  int corner = 0;
+  deltaTL(table, leg, p_, &corner);
+  return corner;
+}
+
 void Blackboard::linkChild(int32_t table, int32_t leg) {
   TableHyp& t = tables_[table];
   LegHyp& l = legs_[leg];
   assert(t.alive && t.n_children < kMaxChildren);
-  int corner = 0;
-  deltaTL(t.pose, l, p_, &corner);
+  const int corner = nearestCorner(t.pose, l);
   l.parent = table;
   l.corner = static_cast<int8_t>(corner);
   t.children[t.n_children++] = leg;
@@ -181,10 +186,8 @@ void Blackboard::moveTable(int32_t id, const Pose2& pose) {
   t.corner_count = {};
   for (int i = 0; i < t.n_children; ++i) {
     LegHyp& l = legs_[t.children[i]];
-    int corner = 0;
-    deltaTL(t.pose, l, p_, &corner);
-    l.corner = static_cast<int8_t>(corner);
-    ++t.corner_count[static_cast<size_t>(corner)];
+    l.corner = static_cast<int8_t>(nearestCorner(t.pose, l));
+    ++t.corner_count[static_cast<size_t>(l.corner)];
   }
 }
 
@@ -196,10 +199,8 @@ void Blackboard::moveLeg(int32_t id, const Pose2& pose) {
   if (l.parent != kNone) {
     TableHyp& t = tables_[l.parent];
     --t.corner_count[static_cast<size_t>(l.corner)];
-    int corner = 0;
-    deltaTL(t.pose, l, p_, &corner);
-    l.corner = static_cast<int8_t>(corner);
-    ++t.corner_count[static_cast<size_t>(corner)];
+    l.corner = static_cast<int8_t>(nearestCorner(t.pose, l));
+    ++t.corner_count[static_cast<size_t>(l.corner)];
   }
 }
 

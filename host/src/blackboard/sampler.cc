@@ -154,12 +154,16 @@ void Sampler::primeLeg(int slot, double beta) {
   probe.side = p.leg_side;
   const int32_t parent = sampleParent(probe, kNone);
 
+  proposeLegBirth(probe.pose, parent, beta);
+}
+
+void Sampler::proposeLegBirth(const Pose2& pose, int32_t parent, double beta) {
   Touched t;
   t.tables.add(parent);
-  bb_.shapeletsNear(c, t.shapelets);
+  bb_.shapeletsNear(pose.position(), t.shapelets);
   begin();
   const double e0 = bb_.localEnergy(t);
-  const int32_t id = bb_.addLeg(probe.pose, parent);
+  const int32_t id = bb_.addLeg(pose, parent);
   t.legs.add(id);
   const double e1 = bb_.localEnergy(t);
   if (!decide(e1 - e0, beta)) {
@@ -209,11 +213,15 @@ void Sampler::parentChange(int32_t leg, double beta) {
   if (!decide(e1 - e0, beta)) bb_.setParent(leg, old_parent);
 }
 
+Pose2 Sampler::jittered(const Pose2& p, double period) {
+  const double x = p.x + rng_.normal(0, opt_.jitter_sigma_r);
+  const double y = p.y + rng_.normal(0, opt_.jitter_sigma_r);
+  return {x, y, wrapPeriod(p.theta + rng_.normal(0, opt_.jitter_sigma_theta), period)};
+}
+
 void Sampler::jitterLeg(int32_t id, double beta) {
   const Pose2 old = bb_.leg(id).pose;
-  const Pose2 moved{old.x + rng_.normal(0, opt_.jitter_sigma_r),
-                    old.y + rng_.normal(0, opt_.jitter_sigma_r),
-                    wrapPeriod(old.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi / 2)};
+  const Pose2 moved = jittered(old, kPi / 2);
   Touched t;
   t.legs.add(id);
   t.tables.add(bb_.leg(id).parent);
@@ -228,9 +236,7 @@ void Sampler::jitterLeg(int32_t id, double beta) {
 
 void Sampler::jitterTable(int32_t id, double beta) {
   const Pose2 old = bb_.table(id).pose;
-  const Pose2 moved{old.x + rng_.normal(0, opt_.jitter_sigma_r),
-                    old.y + rng_.normal(0, opt_.jitter_sigma_r),
-                    wrapPeriod(old.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+  const Pose2 moved = jittered(old, kPi);
   // Half the moves carry the children along rigidly: a table and its legs are tightly coupled
   // (sigma_r_leg), so moving either alone barely moves the pair at low temperature.
   const bool rigid = rng_.uniform() < 0.5;
@@ -279,20 +285,8 @@ void Sampler::proposeChild(int32_t table, double beta) {
     if (tab.corner_count[static_cast<size_t>(c)] == 0) missing[static_cast<size_t>(n++)] = c;
   if (n == 0) return;
   const int corner = missing[rng_.below(static_cast<uint32_t>(n))];
-  const Pose2 pose = {0, 0, wrapPeriod(tab.pose.theta, kPi / 2)};
   const Vec2 c = tab.pose.toWorld(bb_.params().cornerOffset(corner));
-  Touched t;
-  t.tables.add(table);
-  bb_.shapeletsNear(c, t.shapelets);
-  begin();
-  const double e0 = bb_.localEnergy(t);
-  const int32_t id = bb_.addLeg({c.x(), c.y(), pose.theta}, table);
-  t.legs.add(id);
-  const double e1 = bb_.localEnergy(t);
-  if (!decide(e1 - e0, beta)) {
-    bb_.killLeg(id);
-    bb_.releaseLeg(id);
-  }
+  proposeLegBirth({c.x(), c.y(), wrapPeriod(tab.pose.theta, kPi / 2)}, table, beta);
 }
 
 void Sampler::proposeParent(int32_t leg, double beta) {

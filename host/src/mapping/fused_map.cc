@@ -11,11 +11,6 @@ struct Item {
   bool used = false;
 };
 
-bool near(const Pose2& a, const Pose2& b, const FuseOptions& opt) {
-  return std::hypot(a.x - b.x, a.y - b.y) <= opt.radius &&
-         std::abs(wrapPeriod(a.theta - b.theta, kPi)) <= opt.angle;
-}
-
 // Mean pose of `members`; angles modulo pi averaged as doubled angles on the circle.
 Pose2 meanPose(const std::vector<Item>& items, const std::vector<size_t>& members) {
   double x = 0, y = 0, c = 0, s = 0;
@@ -47,7 +42,7 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
     for (size_t i = 0; i < items.size(); ++i) {
       if (items[i].used) continue;
       int count = 0;
-      for (const Item& o : items) count += (!o.used && near(items[i].pose, o.pose, opt));
+      for (const Item& o : items) count += (!o.used && tablesAgree(items[i].pose, o.pose, opt));
       if (count > best_count) {
         best_count = count;
         best = i;
@@ -56,11 +51,11 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
     if (best == items.size() || best_count < opt.min_support) break;
     members.clear();
     for (size_t j = 0; j < items.size(); ++j)
-      if (!items[j].used && near(items[best].pose, items[j].pose, opt)) members.push_back(j);
+      if (!items[j].used && tablesAgree(items[best].pose, items[j].pose, opt)) members.push_back(j);
     const Pose2 centre = meanPose(items, members);
     std::vector<size_t> refined;
     for (size_t j = 0; j < items.size(); ++j)
-      if (!items[j].used && near(centre, items[j].pose, opt)) refined.push_back(j);
+      if (!items[j].used && tablesAgree(centre, items[j].pose, opt)) refined.push_back(j);
     if (refined.size() >= members.size()) members = refined;
     for (size_t j : members) items[j].used = true;
     MapTable t;
@@ -78,13 +73,23 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
     if (!clash) fused.push_back(c);
   }
 
-  for (MapTable& t : fused) {
+  scoreBySupport(fused, per_pose, opt);
+  return fused;
+}
+
+bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt) {
+  return std::hypot(a.x - b.x, a.y - b.y) <= opt.radius &&
+         std::abs(wrapPeriod(a.theta - b.theta, kPi)) <= opt.angle;
+}
+
+void scoreBySupport(std::vector<MapTable>& tables, const std::vector<PoseMap>& per_pose,
+                    const FuseOptions& opt) {
+  for (MapTable& t : tables) {
     int within = 0;
     for (const PoseMap& pm : per_pose)
       within += std::hypot(pm.pose.x - t.pose.x, pm.pose.y - t.pose.y) <= opt.reach;
     t.score = within > 0 ? std::min(1.0, static_cast<double>(t.support) / within) : 0.0;
   }
-  return fused;
 }
 
 }  // namespace crunch

@@ -1,5 +1,7 @@
 #include "crunch/mapping/map_io.h"
 
+#include "core/json_fields.h"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -18,7 +20,7 @@ namespace crunch {
 namespace {
 
 // ordered_json keeps the keys in the contract's order, which makes the file easier to read.
-using Json = nlohmann::ordered_json;
+using OrderedJson = nlohmann::ordered_json;
 
 // A table's orientation is meaningful modulo pi; written in [0, pi) so equal tables read alike.
 double normaliseTableTheta(double theta) {
@@ -31,7 +33,7 @@ double normaliseTableTheta(double theta) {
 }  // namespace
 
 std::string mapToJson(const Map& map) {
-  Json tables = Json::array();
+  OrderedJson tables = OrderedJson::array();
   for (const MapTable& t : map.tables) {
     tables.push_back({{"x", t.pose.x},
                       {"y", t.pose.y},
@@ -42,14 +44,14 @@ std::string mapToJson(const Map& map) {
                       {"score", t.score},
                       {"support", t.support}});
   }
-  Json walls = Json::array();
+  OrderedJson walls = OrderedJson::array();
   for (const MapWall& w : map.walls) {
     walls.push_back(
         {{"x0", w.a.x()}, {"y0", w.a.y()}, {"x1", w.b.x()}, {"y1", w.b.y()}, {"score", w.score}});
   }
-  Json per_pose = Json::array();
+  OrderedJson per_pose = OrderedJson::array();
   for (const PoseMap& pm : map.per_pose) {
-    Json pose_tables = Json::array();
+    OrderedJson pose_tables = OrderedJson::array();
     for (const MapTable& t : pm.tables) {
       pose_tables.push_back(
           {{"x", t.pose.x}, {"y", t.pose.y}, {"theta", normaliseTableTheta(t.pose.theta)}});
@@ -59,7 +61,7 @@ std::string mapToJson(const Map& map) {
                         {"tables", std::move(pose_tables)}});
   }
   const MapStats& s = map.stats;
-  Json doc = {{"schema", kMapSchema},
+  OrderedJson doc = {{"schema", kMapSchema},
               {"tables", std::move(tables)},
               {"walls", std::move(walls)},
               {"per_pose", std::move(per_pose)},
@@ -78,39 +80,8 @@ std::string mapToJson(const Map& map) {
 
 namespace {
 
-// A validation failure at `path`. It unwinds to parseMapJson and never leaves this file: early
-// returns from every field check would bury the rules in plumbing.
-struct FieldError {
-  std::string path;
-  std::string what;
-};
-
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw FieldError{path, what};
-}
-
-std::string member(const std::string& path, std::string_view key) {
-  return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-
-std::string element(const std::string& path, size_t i) {
-  return path + "[" + std::to_string(i) + "]";
-}
-
-void expectObject(const Json& j, const std::string& path) {
-  if (!j.is_object()) fail(path, std::string("expected an object, got ") + j.type_name());
-}
-
-void expectArray(const Json& j, const std::string& path) {
-  if (!j.is_array()) fail(path, std::string("expected an array, got ") + j.type_name());
-}
-
-double number(const Json& j, const std::string& path) {
-  if (!j.is_number()) fail(path, std::string("expected a number, got ") + j.type_name());
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(path, "expected a finite number");
-  return v;
-}
+using Json = json_fields::Json;  // reading: key order does not matter
+using namespace json_fields;
 
 // A non-negative count that fits in T.
 template <typename T>
@@ -119,18 +90,6 @@ T count(const Json& j, const std::string& path) {
                   j.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<T>::max());
   if (!ok) fail(path, "expected a non-negative integer, got " + j.dump());
   return static_cast<T>(j.get<uint64_t>());
-}
-
-double requiredNumber(const Json& obj, const std::string& path, std::string_view key) {
-  const auto it = obj.find(key);
-  if (it == obj.end()) fail(member(path, key), "missing (required)");
-  return number(*it, member(path, key));
-}
-
-double optionalNumber(const Json& obj, const std::string& path, std::string_view key,
-                      double fallback) {
-  const auto it = obj.find(key);
-  return it == obj.end() ? fallback : number(*it, member(path, key));
 }
 
 template <typename T>
@@ -225,16 +184,6 @@ Map parseMapDocument(const Json& doc) {
   return map;
 }
 
-// nlohmann's messages start with "[json.exception.parse_error.101] "; the tag means nothing to
-// a user.
-std::string withoutExceptionTag(const std::string& what) {
-  if (what.rfind("[json.exception.", 0) == 0) {
-    const size_t end = what.find("] ");
-    if (end != std::string::npos) return what.substr(end + 2);
-  }
-  return what;
-}
-
 }  // namespace
 
 Result<Map> parseMapJson(const std::string& text, const std::string& source) {
@@ -248,7 +197,7 @@ Result<Map> parseMapJson(const std::string& text, const std::string& source) {
     return parseMapDocument(doc);
   } catch (const FieldError& e) {
     // An empty path is the document itself.
-    return Error{source + ": " + (e.path.empty() ? "(document)" : e.path) + ": " + e.what};
+    return Error{describe(source, e)};
   }
 }
 

@@ -10,6 +10,16 @@
 namespace crunch {
 
 namespace {
+// A table of the model's one size at `pose`.
+MapTable modelTable(const Pose2& pose, const ModelParams& model) {
+  MapTable t;
+  t.pose = pose;
+  t.width = model.table_width;
+  t.depth = model.table_depth;
+  t.leg = model.leg_side;
+  return t;
+}
+
 // The fused map as one inference over every shapelet of the run (the paper's future work of
 // "longer-term memories of shapelets", §4): a blackboard whose working memory holds them all,
 // annealed with the same schedule and `global_sweeps` sweeps per temperature. The spatial hash
@@ -33,26 +43,15 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options, Rng& rn
       sampler.mapTables(poses);
     }
   }
+  // Support: per-pose MAPs that agree with each global table.
   std::vector<MapTable> out;
   for (const Pose2& p : poses) {
-    MapTable t;
-    t.pose = p;
-    t.width = options.model.table_width;
-    t.depth = options.model.table_depth;
-    t.leg = options.model.leg_side;
+    MapTable t = modelTable(p, options.model);
+    for (const PoseMap& pm : map.per_pose)
+      for (const MapTable& q : pm.tables) t.support += tablesAgree(q.pose, t.pose, options.fuse);
     out.push_back(t);
   }
-  // Support: per-pose MAPs that agree with each global table.
-  for (MapTable& t : out) {
-    int within = 0;
-    for (const PoseMap& pm : map.per_pose) {
-      within += std::hypot(pm.pose.x - t.pose.x, pm.pose.y - t.pose.y) <= options.fuse.reach;
-      for (const MapTable& q : pm.tables)
-        t.support += std::hypot(q.pose.x - t.pose.x, q.pose.y - t.pose.y) <= options.fuse.radius &&
-                     std::abs(wrapPeriod(q.pose.theta - t.pose.theta, kPi)) <= options.fuse.angle;
-    }
-    t.score = within > 0 ? std::min(1.0, static_cast<double>(t.support) / within) : 0.0;
-  }
+  scoreBySupport(out, map.per_pose, options.fuse);
   return out;
 }
 }  // namespace
@@ -90,14 +89,7 @@ Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped
       PoseMap pm;
       pm.pose = poses[t];
       pm.shapelets = fresh;
-      for (const Pose2& p : tables) {
-        MapTable mt;
-        mt.pose = p;
-        mt.width = options.model.table_width;
-        mt.depth = options.model.table_depth;
-        mt.leg = options.model.leg_side;
-        pm.tables.push_back(mt);
-      }
+      for (const Pose2& p : tables) pm.tables.push_back(modelTable(p, options.model));
       map.per_pose.push_back(std::move(pm));
     }
     if (options.progress) options.progress(static_cast<int>(t + 1), static_cast<int>(poses.size()));

@@ -1,5 +1,7 @@
 #include "crunch/scene/scene.h"
 
+#include "core/json_fields.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cerrno>
@@ -8,7 +10,6 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
-#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string_view>
 
@@ -89,66 +90,13 @@ Scene defaultArena() {
 
 namespace {
 
-using nlohmann::json;
-
-// A validation failure at `path`. It unwinds to parseScene and never leaves this file: with
-// dozens of fields each checked in a few ways, early returns would bury the rules in plumbing.
-struct FieldError {
-  std::string path;
-  std::string what;
-};
-
-[[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw FieldError{path, what};
-}
-
-std::string member(const std::string& path, std::string_view key) {
-  return path.empty() ? std::string(key) : path + "." + std::string(key);
-}
-
-std::string element(const std::string& path, size_t i) {
-  return path + "[" + std::to_string(i) + "]";
-}
+using json = json_fields::Json;
+using namespace json_fields;
 
 std::string fmt(double v) {
   std::ostringstream os;
   os << v;
   return os.str();
-}
-
-// Requires `j` to be an object whose keys are all in `allowed`.
-void expectObject(const json& j, const std::string& path,
-                  std::initializer_list<std::string_view> allowed) {
-  if (!j.is_object()) fail(path, std::string("expected an object, got ") + j.type_name());
-  for (auto it = j.begin(); it != j.end(); ++it) {
-    if (std::find(allowed.begin(), allowed.end(), it.key()) != allowed.end()) continue;
-    std::string list;
-    for (std::string_view k : allowed) list += (list.empty() ? "" : ", ") + std::string(k);
-    fail(member(path, it.key()), "unknown key (allowed: " + list + ")");
-  }
-}
-
-void expectArray(const json& j, const std::string& path) {
-  if (!j.is_array()) fail(path, std::string("expected an array, got ") + j.type_name());
-}
-
-double number(const json& j, const std::string& path) {
-  if (!j.is_number()) fail(path, std::string("expected a number, got ") + j.type_name());
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) fail(path, "expected a finite number");
-  return v;
-}
-
-double requiredNumber(const json& obj, const std::string& path, std::string_view key) {
-  const auto it = obj.find(key);
-  if (it == obj.end()) fail(member(path, key), "missing (required)");
-  return number(*it, member(path, key));
-}
-
-double optionalNumber(const json& obj, const std::string& path, std::string_view key,
-                      double fallback) {
-  const auto it = obj.find(key);
-  return it == obj.end() ? fallback : number(*it, member(path, key));
 }
 
 double positive(double v, const std::string& path) {
@@ -295,16 +243,6 @@ void parsePoses(const json& doc, Scene& s) {
   }
 }
 
-// nlohmann's messages start with "[json.exception.parse_error.101] "; the tag means nothing to
-// a user editing a scene file.
-std::string withoutExceptionTag(const std::string& what) {
-  if (what.rfind("[json.exception.", 0) == 0) {
-    const size_t end = what.find("] ");
-    if (end != std::string::npos) return what.substr(end + 2);
-  }
-  return what;
-}
-
 // Follows a SAX parse and remembers the field path at which parsing stopped. Used only to name
 // the field of a number too large for a double ("1e999"): nlohmann rejects it while parsing,
 // before there is a document to walk, and its message names no field.
@@ -389,7 +327,7 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& source
     parsePoses(doc, s);
   } catch (const FieldError& e) {
     // An empty path is the document itself.
-    return Error{source + ": " + (e.path.empty() ? "(document)" : e.path) + ": " + e.what};
+    return Error{describe(source, e)};
   }
   return s;
 }

@@ -120,6 +120,8 @@ class Blackboard {
   void clear();
 
  private:
+  // The corner of a table at `table` that `leg` belongs to: the argmin of eq. 10.
+  int nearestCorner(const Pose2& table, const LegHyp& leg) const;
   void linkChild(int32_t table, int32_t leg);
   void unlinkChild(int32_t table, int32_t leg);
   double tableTerms(int32_t id, const Touched& t) const;

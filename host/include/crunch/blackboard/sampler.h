@@ -91,9 +91,14 @@ class Sampler {
   void begin();
   bool decide(double delta, double beta);
   void primeLeg(int slot, double beta);
+  // Proposes a new leg at `pose` under `parent` (or kNone); the birth moves of priming and of
+  // Q(ch(T)) share it.
+  void proposeLegBirth(const Pose2& pose, int32_t parent, double beta);
   void deathTable(int32_t id, double beta);
   void deathLeg(int32_t id, double beta);
   void parentChange(int32_t leg, double beta);
+  // A pose move's target: Gaussian steps in x, y and theta (theta kept modulo `period`).
+  Pose2 jittered(const Pose2& p, double period);
   void jitterTable(int32_t id, double beta);
   void jitterLeg(int32_t id, double beta);
   void proposeChild(int32_t table, double beta);

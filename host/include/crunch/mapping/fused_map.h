@@ -26,4 +26,12 @@ struct FuseOptions {
 
 std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const FuseOptions& opt);
 
+// True if two table poses agree within `radius` and `angle` (modulo pi).
+bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt);
+
+// Sets each table's score from its support: support divided by the inferring poses within
+// `reach` of it, capped at 1 (0 when none is within reach).
+void scoreBySupport(std::vector<MapTable>& tables, const std::vector<PoseMap>& per_pose,
+                    const FuseOptions& opt);
+
 }  // namespace crunch
