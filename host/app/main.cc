@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
                  "cluster the per-pose MAPs)")
       ->capture_default_str();
   app.add_option("--global-chains", opt.mapping.global_chains,
-                 "independent chains of the global inference; the best log joint wins")
+                 "independent chains of the global inference; a table needs half to agree")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 

@@ -45,10 +45,12 @@ RaySensorModel::RaySensorModel(const World& world, std::vector<WhiskerMount> mou
   offsets_.push_back(0.0);
   for (int k = 1; k <= n; ++k) offsets_.push_back(amp * k / n);
   for (int k = 1; k <= n; ++k) offsets_.push_back(-amp * k / n);
+  free_.reserve(offsets_.size() * mounts_.size());
 }
 
 void RaySensorModel::sense(const Pose2& pose, Rng& rng, std::vector<ContactReport>& out) {
   for (Peak& p : peaks_) p = Peak{};
+  free_.clear();
 
   for (const double offset : offsets_) {
     const Pose2 at{pose.x, pose.y, pose.theta + offset};
@@ -59,6 +61,11 @@ void RaySensorModel::sense(const Pose2& pose, Rng& rng, std::vector<ContactRepor
       // Strictly smaller: on a tie the earlier sample of the whisk wins.
       if (hit && (!peaks_[w].hit || hit->distance < peaks_[w].distance)) {
         peaks_[w] = {true, hit->distance, hit->normal, at};
+      }
+      if (!hit) {
+        const Vec2 dir{std::cos(at.theta + m.bearing), std::sin(at.theta + m.bearing)};
+        const Vec2 base = at.toWorld(m.base);
+        free_.push_back({base, base + m.length * dir});
       }
     }
   }

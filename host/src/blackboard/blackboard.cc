@@ -1,6 +1,7 @@
 #include "crunch/blackboard/blackboard.h"
 
 #include <cassert>
+#include <algorithm>
 #include <cmath>
 
 namespace crunch {
@@ -216,10 +217,26 @@ void Blackboard::clear() {
 
 // ---------------------------------------------------------------- the log joint
 
+double Blackboard::freeTerm(const Pose2& pose) const {
+  if (!free_) return 0.0;
+  const int passes = free_->maxInSquare(pose, p_.leg_side, p_.free_margin);
+  return std::min(passes, p_.free_pass_cap) * std::log(p_.p_miss);
+}
+
+double Blackboard::tableFreeTerm(const Pose2& table) const {
+  if (!free_) return 0.0;
+  double e = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    const Vec2 c = table.toWorld(p_.cornerOffset(i));
+    e += freeTerm({c.x(), c.y(), table.theta});
+  }
+  return e;
+}
+
 double Blackboard::tableTerms(int32_t id, const Touched& t) const {
   const TableHyp& tab = tables_[id];
   if (!tab.alive) return 0.0;
-  double e = table_odds_ + tab.missingLegs() * log_eps_a_;
+  double e = table_odds_ + tab.missingLegs() * log_eps_a_ + tableFreeTerm(tab.pose);
   const OrientedRect rect = tableRect(tab.pose);
   table_hash_.query(tab.pose.position(), 2.0 * rect.circumradius(), [&](int32_t o) {
     if (o == id || !tables_[o].alive) return;
@@ -234,7 +251,7 @@ double Blackboard::legTerms(int32_t id, const Touched& t) const {
   if (!l.alive) return 0.0;
   const bool has_parent = l.parent != kNone;
   const double dtl = has_parent ? deltaTL(tables_[l.parent].pose, l, p_, nullptr) : 0.0;
-  double e = logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_);
+  double e = logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(l.pose);
   const OrientedRect rect = legRect(l);
   leg_hash_.query(l.pose.position(), 2.0 * rect.circumradius(), [&](int32_t o) {
     if (o == id || !legs_[o].alive) return;
@@ -279,7 +296,7 @@ double Blackboard::totalEnergy() const {
   for (int32_t i = 0; i < tables_.extent(); ++i) {
     const TableHyp& a = tables_[i];
     if (!a.alive) continue;
-    e += table_odds_ + a.missingLegs() * log_eps_a_;
+    e += table_odds_ + a.missingLegs() * log_eps_a_ + tableFreeTerm(a.pose);
     for (int32_t j = i + 1; j < tables_.extent(); ++j)
       if (tables_[j].alive && overlaps(tableRect(a.pose), tableRect(tables_[j].pose)))
         e += log_eps_b_;
@@ -289,7 +306,7 @@ double Blackboard::totalEnergy() const {
     if (!a.alive) continue;
     const bool has_parent = a.parent != kNone;
     const double dtl = has_parent ? deltaTL(tables_[a.parent].pose, a, p_, nullptr) : 0.0;
-    e += logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_);
+    e += logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(a.pose);
     for (int32_t j = i + 1; j < legs_.extent(); ++j) {
       const LegHyp& b = legs_[j];
       if (!b.alive) continue;

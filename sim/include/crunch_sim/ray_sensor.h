@@ -56,6 +56,10 @@ class RaySensorModel final : public SensorModel {
   void sense(const Pose2& pose, Rng& rng, std::vector<ContactReport>& out) override;
 
   const std::vector<WhiskerMount>& mounts() const override { return mounts_; }
+  // The samples of the last whisk in which a whisker touched nothing along its whole length.
+  void freeRays(std::vector<FreeRay>& out) const override {
+    out.insert(out.end(), free_.begin(), free_.end());
+  }
   const NoiseRegime& noise() const { return noise_; }
   const Options& options() const { return options_; }
 
@@ -78,6 +82,7 @@ class RaySensorModel final : public SensorModel {
   Options options_;
   std::vector<double> offsets_;
   std::vector<Peak> peaks_;  // one per whisker, sized once
+  std::vector<FreeRay> free_;  // untouched samples of the last whisk, capacity reserved once
 };
 
 }  // namespace crunch::sim

@@ -7,6 +7,7 @@
 //         + sum_S   log(c_S + sum_L alpha_S exp(-Delta_LS))                       (eqs. 11, 14, 17)
 //         + (#overlapping same-type pairs) log eps_b                             (eq. 25)
 //         + (#leg pairs with the same parent at the same corner) log eps_c       (eq. 26)
+//         + sum over legs and table corners of min(passes, cap) log p_miss     (free space)
 // where logodds(P) = log P - log(1 - P) is each hypothesis' presence against its absence.
 // A move's acceptance needs only the change of J, which localEnergy() computes over the
 // hypotheses and shapelets the move touches: the Markov blankets of eq. 29.
@@ -26,6 +27,7 @@
 #include "crunch/blackboard/params.h"
 #include "crunch/blackboard/pool.h"
 #include "crunch/blackboard/spatial_hash.h"
+#include "crunch/mapping/free_space.h"
 #include "crunch/mapping/shapelet.h"
 
 namespace crunch {
@@ -59,6 +61,9 @@ class Blackboard {
   Blackboard(const ModelParams& params, int working_memory, size_t reserve_hypotheses);
 
   const ModelParams& params() const { return p_; }
+
+  // Attaches negative evidence (not owned; must outlive the blackboard, or pass nullptr).
+  void setFreeSpace(const FreeSpaceGrid* grid) { free_ = grid; }
 
   // ---- Working memory (the queue of the most recent shapelets, §2.7) ----
   // Adds a shapelet, evicting the oldest when full. Returns its slot.
@@ -127,6 +132,10 @@ class Blackboard {
   double tableTerms(int32_t id, const Touched& t) const;
   double legTerms(int32_t id, const Touched& t) const;
   double shapeletTerm(int slot) const;
+  // The negative-evidence term of a leg-sized square at `pose` (0 without a grid).
+  double freeTerm(const Pose2& pose) const;
+  // Negative evidence at a table's four corners.
+  double tableFreeTerm(const Pose2& table) const;
 
   ModelParams p_;
   Pool<TableHyp> tables_;
@@ -141,6 +150,7 @@ class Blackboard {
   int live_tables_ = 0;
   int live_legs_ = 0;
   double log_eps_a_, log_eps_b_, log_eps_c_, table_odds_;
+  const FreeSpaceGrid* free_ = nullptr;
 };
 
 }  // namespace crunch

@@ -38,6 +38,14 @@ struct ModelParams {
   // Eq. 30: a parent or child farther than this many sigmas is treated as unrelated
   // (its density is below exp(-link_sigmas^2 / 1) ~ 1e-16 of the peak).
   double link_sigmas = 6.0;
+  // Negative evidence (free_space.h; used only when a FreeSpaceGrid is attached): a leg, or a
+  // table's corner, through whose core an untouched whisker passed is charged log(p_miss) per
+  // pass, counting at most free_pass_cap passes (neighbouring samples of one whisk are not
+  // independent looks). The core is the leg square shrunk by free_margin on every side, so a
+  // whisker grazing a real leg's outline does not count against it.
+  double p_miss = 0.05;
+  int free_pass_cap = 2;
+  double free_margin = 0.015;
 
   // Offset of corner i's leg centre in the table frame (legs flush in the corners),
   // corner order (+x+y, -x+y, -x-y, +x-y).

@@ -23,8 +23,11 @@ struct MappingOptions {
   uint64_t seed = 1;
   // > 0: the fused map is one annealing over all shapelets with this many sweeps per
   // temperature (global inference); 0: clustering of the per-pose MAPs (fused_map.h).
-  int global_sweeps = 4;
-  int global_chains = 4;  // independent annealing chains; the highest log joint wins
+  int global_sweeps = 8;
+  int global_chains = 8;  // independent chains; a table needs half of them to agree
+  // The global inference also weighs negative evidence: where whiskers swept and touched
+  // nothing (free_space.h). Per-pose MAPs never do (the paper's collation).
+  bool negative_evidence = true;
   // Called after each pose with (poses done, poses total); may be empty.
   std::function<void(int, int)> progress;
 };

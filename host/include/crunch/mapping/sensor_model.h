@@ -8,6 +8,7 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/rng.h"
+#include "crunch/mapping/free_space.h"
 #include "crunch/mapping/shapelet.h"
 
 namespace crunch {
@@ -29,6 +30,9 @@ class SensorModel {
   // Appends to `out` the reports of one body whisk at `pose`. Uses `rng` for all noise.
   virtual void sense(const Pose2& pose, Rng& rng, std::vector<ContactReport>& out) = 0;
   virtual const std::vector<WhiskerMount>& mounts() const = 0;
+  // Appends to `out` the whisker samples of the last sense() call that touched nothing
+  // (negative evidence, free_space.h). A model that cannot tell appends nothing.
+  virtual void freeRays(std::vector<FreeRay>& out) const { (void)out; }
 };
 
 }  // namespace crunch
