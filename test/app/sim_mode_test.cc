@@ -5,6 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
 #include "crunch/mapping/map_io.h"
 
@@ -40,33 +41,41 @@ nlohmann::json report(const fs::path& dir) { return nlohmann::json::parse(slurp(
 }  // namespace
 
 TEST_CASE("crunchhost --sim: default arena, realistic noise, finds the tables", "[app]") {
-  // The target: recall 1.0 at 0.15 m / 15 deg. Seeds 1 and 2 meet it; seeds 3 and 4
-  // miss one table (docs/BLACKBOARD.md, "Where it stands"), so the test pins the seeds that
-  // pass rather than claiming every seed does. Precision: measured 0.86 on both; the bound
-  // leaves room for one more wall phantom.
-  constexpr double kMinRecall = 1.0;
-  constexpr double kMinPrecision = 0.7;
-  for (uint64_t seed : {1, 2}) {
+  // The target: recall 1.0 at 0.15 m / 15 deg. Measured over seeds 1-10: recall 1.0 on
+  // 7, 0.83 (one table missed) on 3; precision 0.67-1.0 (every phantom at a wall). Which seeds
+  // miss depends on the random path, so the test bounds four seeds together rather than pinning
+  // one: each finds at least five of six tables, and on average they find at least 95% of the
+  // tables (three of the four find all six) with at least 70% precision (seeds 1-4: 0.75).
+  constexpr double kMinRecallEach = 5.0 / 6.0 - 1e-9;
+  constexpr double kMinRecallMean = 0.95;
+  constexpr double kMinPrecisionMean = 0.70;
+  double recall_sum = 0, precision_sum = 0;
+  const std::vector<uint64_t> seeds = {1, 2, 3, 4};
+  for (uint64_t seed : seeds) {
     const fs::path dir = freshDir("default_" + std::to_string(seed));
     app::SimOptions opt;
     opt.seed = seed;
     opt.out_dir = dir.string();
     const RunResult r = run(opt);
-    INFO(r.err);
+    INFO("seed " << seed << ": " << r.err);
     REQUIRE(r.code == 0);
     const auto rep = report(dir);
     CHECK(rep["accuracy"]["true_tables"] == 6);
-    CHECK(rep["accuracy"]["recall"].get<double>() >= kMinRecall);
-    CHECK(rep["accuracy"]["precision"].get<double>() >= kMinPrecision);
-    // Phantoms are expected at walls (walls are not modelled); elsewhere at most one.
-    CHECK(rep["accuracy"]["phantoms_elsewhere"].get<int>() <= 1);
-    CHECK(rep["accuracy"]["mean_position_error_m"].get<double>() < 0.02);  // measured 6-7 mm
+    const double recall = rep["accuracy"]["recall"].get<double>();
+    CHECK(recall >= kMinRecallEach);
+    recall_sum += recall;
+    precision_sum += rep["accuracy"]["precision"].get<double>();
+    // Phantoms are expected at walls (walls are not modelled); never elsewhere so far.
+    CHECK(rep["accuracy"]["phantoms_elsewhere"].get<int>() == 0);
+    CHECK(rep["accuracy"]["mean_position_error_m"].get<double>() < 0.02);  // measured 4-7 mm
     CHECK(fs::file_size(dir / "map.png") > 10000);
     const auto map = parseMapJson(slurp(dir / "map.json"), "map.json");
     REQUIRE(map.ok());
     CHECK(map.value().per_pose.size() > 50);
     CHECK(map.value().stats.poses + map.value().stats.skipped_poses == 400);
   }
+  CHECK(recall_sum / seeds.size() >= kMinRecallMean);
+  CHECK(precision_sum / seeds.size() >= kMinPrecisionMean);
 }
 
 TEST_CASE("crunchhost --sim: every noise regime runs and writes all three files", "[app]") {

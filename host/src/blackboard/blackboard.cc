@@ -15,18 +15,18 @@ int log2Buckets(size_t expected) {
   return b;
 }
 // Cell sides: about the reach of the look-ups each hash serves.
-constexpr double kTableCell = 0.5;
-constexpr double kLegCell = 0.1;
-constexpr double kShapeletCell = 0.1;
+constexpr double kTableCell = 1.0;
+constexpr double kLegCell = 0.2;
+constexpr double kShapeletCell = 0.2;
 }  // namespace
 
 Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t reserve)
     : p_(params),
       tables_(reserve),
       legs_(reserve),
-      table_hash_(kTableCell, log2Buckets(reserve), 4),
-      leg_hash_(kLegCell, log2Buckets(reserve), 4),
-      shapelet_hash_(kShapeletCell, log2Buckets(static_cast<size_t>(working_memory)), 4),
+      table_hash_(kTableCell, log2Buckets(reserve)),
+      leg_hash_(kLegCell, log2Buckets(reserve)),
+      shapelet_hash_(kShapeletCell, log2Buckets(static_cast<size_t>(working_memory))),
       wm_(static_cast<size_t>(working_memory)),
       wm_used_(static_cast<size_t>(working_memory), false),
       log_eps_a_(std::log(params.eps_a)),
