@@ -121,6 +121,7 @@ constexpr Rgb kTruthTopEdge{0.62, 0.62, 0.62};
 constexpr Rgb kTruthLeg{0.15, 0.15, 0.15};
 constexpr Rgb kWall{0.0, 0.0, 0.0};
 constexpr Rgb kPoseDot{0.0, 0.0, 0.0};
+constexpr Rgb kPlannedPoseDot{0.70, 0.70, 0.70};  // planned poses with no contact
 constexpr Rgb kPerPose{0.85, 0.0, 0.0};
 constexpr double kPerPoseAlpha = 0.22;  // about five agreeing poses reach near-solid red
 constexpr Rgb kShapeletLine{1.0, 0.62, 0.0};
@@ -300,15 +301,8 @@ void drawWalls(const Painter& p, const Scene& truth) {
   cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_BUTT);
 }
 
-// Robot positions: the poses the map was made from, else the scene's planned poses. Each
-// position is drawn once however many headings it was visited with.
-std::vector<Vec2> uniquePositions(const Map& map, const Scene& truth) {
-  std::vector<Pose2> poses;
-  if (map.per_pose.empty()) {
-    poses = truth.poses;
-  } else {
-    for (const PoseMap& pm : map.per_pose) poses.push_back(pm.pose);
-  }
+// Each position drawn once however many headings it was visited with.
+std::vector<Vec2> uniquePositions(const std::vector<Pose2>& poses) {
   std::set<std::pair<long long, long long>> seen;  // millimetre cells
   std::vector<Vec2> out;
   for (const Pose2& pose : poses) {
@@ -320,8 +314,15 @@ std::vector<Vec2> uniquePositions(const Map& map, const Scene& truth) {
   return out;
 }
 
+// Robot positions, like the paper's Fig. 6: the scene's planned poses in grey, and in black the
+// poses whose contacts were inferred from (map.per_pose).
 void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth) {
-  for (const Vec2& pos : uniquePositions(map, truth)) p.dotPath(pos, kPoseDotRadius);
+  for (const Vec2& pos : uniquePositions(truth.poses)) p.dotPath(pos, kPoseDotRadius);
+  p.colour(kPlannedPoseDot);
+  cairo_fill(p.cr());
+  std::vector<Pose2> inferred;
+  for (const PoseMap& pm : map.per_pose) inferred.push_back(pm.pose);
+  for (const Vec2& pos : uniquePositions(inferred)) p.dotPath(pos, kPoseDotRadius);
   p.colour(kPoseDot);
   cairo_fill(p.cr());
 }
@@ -381,11 +382,11 @@ void drawFusedTables(const Painter& p, const Map& map) {
 std::string titleLine(const Map& map, const Scene& truth, const RenderOptions& options) {
   std::size_t per_pose_tables = 0;
   for (const PoseMap& pm : map.per_pose) per_pose_tables += pm.tables.size();
-  // The same poses the dots show: the run's, else the scene's plan.
-  const std::size_t poses = map.per_pose.empty() ? truth.poses.size() : map.per_pose.size();
+  const std::size_t poses = truth.poses.size();
   std::string line = options.title.empty() ? std::string() : options.title + "   ";
   line += std::to_string(truth.tables.size()) + " true tables | " + std::to_string(poses) +
-          " poses | " + std::to_string(per_pose_tables) + " per-pose tables | " +
+          " poses (" + std::to_string(map.per_pose.size()) + " with contacts) | " +
+          std::to_string(per_pose_tables) + " per-pose tables | " +
           std::to_string(map.tables.size()) + " fused | " + std::to_string(map.shapelets.size()) +
           " shapelets";
   return line;
@@ -450,7 +451,7 @@ void drawLegend(const Painter& p, const RenderOptions& options) {
   cairo_arc(cr, x0 + 0.5 * icon_w, y + 0.5 * icon_h, kPoseDotRadius, 0.0, 2.0 * kPi);
   p.colour(kPoseDot);
   cairo_fill(cr);
-  label("robot positions");
+  label("poses with contacts (grey: none)");
 
   if (options.draw_per_pose) {
     // Offset outlines show how agreement darkens the red.
