@@ -451,7 +451,7 @@ void drawLegend(const Painter& p, const RenderOptions& options) {
   cairo_arc(cr, x0 + 0.5 * icon_w, y + 0.5 * icon_h, kPoseDotRadius, 0.0, 2.0 * kPi);
   p.colour(kPoseDot);
   cairo_fill(cr);
-  label("poses with contacts (grey: none)");
+  label("poses, grey: no touch");
 
   if (options.draw_per_pose) {
     // Offset outlines show how agreement darkens the red.
