@@ -33,6 +33,9 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_flag("!--no-smart-proposals", s.smart_parent,
                "use the paper's blind proposals (uniform table placements, no corner fit)");
+  app.add_option("--smart-gain", s.smart_parent_gain,
+                 "weight added per leg already at a placement's other corners")
+      ->capture_default_str();
   app.add_option("--min-support", opt.mapping.fuse.min_support,
                  "per-pose MAPs that must agree for a fused table")
       ->capture_default_str();

@@ -310,7 +310,7 @@ void Sampler::proposeParent(int32_t leg, double beta) {
           const LegHyp& ol = bb_.leg(o);
           if (o != leg && ol.alive &&
               (ol.pose.position() - corner).squaredNorm() <= std::pow(p.cornerLinkRadius(), 2))
-            w += 8.0;
+            w += opt_.smart_parent_gain;
         });
       }
     }

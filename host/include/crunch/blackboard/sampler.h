@@ -50,6 +50,8 @@ struct SamplerOptions {
   // already near its other corners, and let the new table adopt those orphan legs in the same
   // move (the paper's "smart proposals", §4). Off: uniform over the 8 placements, no adoption.
   bool smart_parent = true;
+  // Each leg near another corner of a placement adds this to its weight (base weight 1).
+  double smart_parent_gain = 8.0;
   bool prune = true;
 
   // Empty when valid, else what is wrong.
