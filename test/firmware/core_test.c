@@ -752,6 +752,22 @@ static void test_isr_cycles_avr(void) {
   CHECK(worst_data < 20000u); /* 500 us at 40 MIPS */
   CHECK(worst_bus < 20000u);
 }
+
+/* The main loop's cost per frame (ring pop under the mask, CRC-16, link write). */
+static void test_board_poll_cycles_avr(void) {
+  uint16_t t0;
+  uint16_t t1;
+  uint8_t bytes[BRIDGE_FRAME_LEN];
+  setup(0u);
+  sampler_tick(&fx.board.sampler);
+  TCCR1A = 0u;
+  TCCR1B = (uint8_t)(1u << CS10);
+  t0 = TCNT1;
+  CHECK_EQ(board_poll(&fx.board), FW_OK);
+  t1 = TCNT1;
+  CHECK_EQ(hal_host_link_drain(&fx.hal, bytes, (uint16_t)BRIDGE_FRAME_LEN), BRIDGE_FRAME_LEN);
+  FW_PRINTF(FW_PSTR("main loop: board_poll one frame %u AVR cycles\n"), (unsigned)(t1 - t0));
+}
 #endif
 
 int main(void) {
@@ -789,6 +805,7 @@ int main(void) {
   FW_RUN(test_two_boards_keep_separate_contexts);
 #ifdef __AVR__
   FW_RUN(test_isr_cycles_avr);
+  FW_RUN(test_board_poll_cycles_avr);
 #endif
   FW_PRINTF(FW_PSTR("sizes: board_t %u B, sampler_t %u B, ring_t %u B\n"),
             (unsigned)sizeof(board_t), (unsigned)sizeof(sampler_t), (unsigned)sizeof(ring_t));

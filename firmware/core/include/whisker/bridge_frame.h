@@ -30,7 +30,9 @@
 #define BRIDGE_ST_BUSY 0x0010u      /* the bus was still busy at the tick: sample skipped */
 #define BRIDGE_ST_POWERUP 0x0020u   /* within the sensor's power-up window: no data yet */
 #define BRIDGE_ST_DROPPED 0x0040u   /* the ring overflowed before this sample: data was lost */
-#define BRIDGE_ST_NO_DATA 0x003Eu   /* these mean Alpha and Beta carry no measurement */
+#define BRIDGE_ST_NO_DATA 0x003Eu   /* these mean Alpha and Beta carry no measurement (0) */
+/* STALE, DROPPED and the MLX_ST_* bits leave Alpha and Beta as measured, but the sample is
+ * still not "fresh and valid": only status 0 is. */
 
 typedef struct {
   uint8_t board;

@@ -6,8 +6,12 @@
  *    it stores with BRIDGE_ST_DROPPED so the loss is visible downstream.
  *  - ring_pop() is called only from the main loop, and only between hal_irq_save() and
  *    hal_irq_restore() (ring_pop_irqsafe() does that), because the producer may move the tail
- *    when it drops the oldest sample. The critical section copies one 12-byte record.
- *  - No allocation: storage is the struct itself; RING_CAPACITY is a power of two.
+ *    when it drops the oldest sample. The critical section copies one record (10 bytes on
+ *    the dsPIC and the AVR, 12 with a PC's padding).
+ *  - No allocation: storage is the struct itself; RING_CAPACITY is a power of two (16 ms of
+ *    samples at 2 kHz), so the main loop may stall that long before anything is lost.
+ *  - The DROPPED mark goes on the sample whose push dropped the oldest (the newest one); where
+ *    the gap is shows in the timestamps.
  */
 #ifndef WHISKER_RING_H
 #define WHISKER_RING_H

@@ -3,12 +3,19 @@
  * Each tick collects the transfer started at the previous tick and starts the next one, so the
  * ISR never waits on the bus (O(1), no loops over data beyond the 8-byte frame):
  *  - POWERUP: the MLX90333 needs ~16 ms after power-up (SAMPLER_POWERUP_TICKS ticks); samples
- *    pushed then carry BRIDGE_ST_POWERUP.
+ *    pushed then carry BRIDGE_ST_POWERUP with Alpha = Beta = 0, and the bus stays quiet until
+ *    the last of those ticks, which starts the first transfer (collected at the first RUN tick).
  *  - RUN: if the previous transfer is still running the sample is BRIDGE_ST_BUSY; after
- *    SAMPLER_TIMEOUT_TICKS ticks it is aborted and the sample is BRIDGE_ST_TIMEOUT. A completed
- *    frame is decoded (mlx90333.h): a bad start byte or checksum gives BRIDGE_ST_BAD_START /
- *    BRIDGE_ST_CHECKSUM; a frame identical to the previous good one (the sensor has not
- *    refreshed) gives BRIDGE_ST_STALE; MLX diagnostics are copied in as MLX_ST_* bits.
+ *    SAMPLER_TIMEOUT_TICKS ticks it is aborted (hal_spi_abort), the sample is
+ *    BRIDGE_ST_TIMEOUT and a new transfer starts at once. If hal_spi_start() refuses, that is
+ *    counted in spi_error and the next tick, having nothing to collect, is BRIDGE_ST_BUSY.
+ *    A completed frame is decoded (mlx90333.h): a bad start byte or checksum gives
+ *    BRIDGE_ST_BAD_START / BRIDGE_ST_CHECKSUM; a frame identical to the previous good one
+ *    (the sensor has not refreshed) gives BRIDGE_ST_STALE; MLX diagnostics are copied in as
+ *    MLX_ST_* bits.
+ *    Samples with a NO_DATA bit (bridge_frame.h) carry Alpha = Beta = 0; STALE and diagnostic
+ *    samples carry the values the sensor sent, flagged. (An emulator that answers the same
+ *    deflection twice in a row therefore sees STALE: a real sensor's LSBs never hold still.)
  * Every tick pushes exactly one sample into the ring, with status 0 only for a fresh, valid
  * measurement. A sample that is not fresh and valid is never passed on as if it were.
  * Each fault has a counter in sampler_counters_t. */
