@@ -25,7 +25,6 @@ void ring_init(ring_t *r) {
   r->head = 0u;
   r->tail = 0u;
   r->count = 0u;
-  r->mark_dropped = 0u;
   r->dropped = 0u;
 }
 
@@ -34,19 +33,15 @@ void ring_push(ring_t *r, const ring_sample_t *s) {
   uint8_t head;
   if (r == NULL || s == NULL) return;
   if (r->count >= RING_CAPACITY) {
-    /* Full: drop the oldest. Safe because the consumer only touches tail/count with this
-     * interrupt masked. */
+    /* Full: drop the oldest and mark the new oldest, the sample right after the gap. Safe
+     * because the consumer only touches tail/count/items with this interrupt masked. */
     r->tail = (uint8_t)((r->tail + 1u) & RING_MASK);
     r->count = (uint8_t)(r->count - 1u);
     if (r->dropped != 0xFFFFu) r->dropped = (uint16_t)(r->dropped + 1u);
-    r->mark_dropped = 1u;
+    r->items[r->tail].status = (uint16_t)(r->items[r->tail].status | BRIDGE_ST_DROPPED);
   }
   head = r->head;
   r->items[head] = *s;
-  if (r->mark_dropped != 0u) {
-    r->items[head].status = (uint16_t)(r->items[head].status | BRIDGE_ST_DROPPED);
-    r->mark_dropped = 0u;
-  }
   r->head = (uint8_t)((head + 1u) & RING_MASK);
   r->count = (uint8_t)(r->count + 1u);
 }
