@@ -92,6 +92,11 @@ class World {
   // The footprint of every box built (walls first, then legs), for tests and drawing.
   const std::vector<OrientedRect>& footprints() const { return footprints_; }
 
+  // The ODE space holding the walls and legs (static geoms: no bodies, no geom data), for a
+  // dynamics simulation that collides its own geoms against them (WhiskeredRobot). Callers may
+  // collide against it but must not add, remove, move or destroy its geoms.
+  dxSpace* space() const { return space_.get(); }
+
  private:
   World();
   void addBox(const OrientedRect& footprint, double height);

@@ -1,0 +1,326 @@
+// Bending whiskers in ODE (paper §2.1-2.3, issue 4): the physical path from a body whisk to the
+// base deflection an MLX90333 Hall sensor sees.
+//
+// WhiskerBeam is one whisker's geometry and material and the tapered Euler-Bernoulli theory the
+// simulation is checked against (docs/WHISKERS.md has the sources of every number):
+//   D(s)  diameter at distance s from the follicle along the external shaft, linear from
+//         1.45 mm at the magnet end of the 160 mm whisker to 0.3 mm at the tip (§2.1); the inner
+//         20 mm sit in the polyurethane plug, so the shaft leaves it at D(0) = 1.306 mm;
+//   I(s)  = pi D(s)^4 / 64, the second moment of area of the round section;
+//   C(d)  = d^2 / k_base + integral_0^d (d - s)^2 / (E I(s)) ds, the lateral compliance at d of a
+//         cantilever on a rotational base spring k_base (the "follicle": the plug);
+//   a lateral push delta at d then needs F = delta / C(d), gives a base moment M = F d and a
+//   base rotation theta = M / k_base, which is what the Hall sensor reads (eq. 1's deflection).
+//
+// WhiskeredRobot is the simulated CrunchBot of the physics sensor path: a Create-like base
+// carrying N such whiskers in an ODE dynamics world, implementing crunch::MobileBase so the same
+// behaviour code (body whisk, §2.3) drives it and the robot.
+//   - The base is kinematic (infinite mass, moved by its commanded velocity): a differential
+//     drive whose wheel speeds are clamped to the Create's +-0.5 m/s, each wheel on its own as a
+//     saturated motor does (Options::max_wheel_speed, wheel_base). Its pose is integrated
+//     exactly (circular arcs); odometry() returns that pose: zero odometry noise, as in the
+//     paper's mapping simulation (§2.8). In ODE it is one kinematic body per whisker, all moved
+//     together, so that each whisker is an island of its own (see Whisker::follicle).
+//   - The base does not collide physically; World::bodyCollides is its bumper. A substep whose
+//     end pose would collide and sit deeper in an obstacle than its start pose (a smaller signed
+//     clearance to the nearest wall or leg footprint) is refused: the base keeps its position
+//     for that substep, still turning in place if commanded (a round body cannot turn deeper),
+//     until a command backs it out. bumped() is true from a refused move (the bumper pressed
+//     against the obstacle) or a colliding pose, until a move that ends clear of everything.
+//   - Each whisker is a chain of rigid capsules joined by two-axis spring-damper joints (ODE
+//     universal joints): axis 1 vertical (in-plane, "horizontal" bending), axis 2 horizontal
+//     across the shaft (vertical bending). The shaft is cut into Options::elements beam elements
+//     (shorter toward the tip, Options::element_grading); each element's joint lumps its exact
+//     bending compliance, 1/k_j = integral over the element of ds / (E I(s)), and sits at the
+//     element's compliance centroid, which makes the chain's C(d) exact for pushes beyond the
+//     element up to the element's own spread. Capsules run from joint to joint (elements + 1 of
+//     them, the last ending at the tip). The follicle joint to the base is the plug's k_base.
+//     Springs use ODE's implicit scheme (a joint stop with lo = hi = 0,
+//     StopERP = h kp / (h kp + kd), StopCFM = 1 / (h kp + kd)): stable for any stiffness.
+//   - ODE's direct solver (dWorldStep) solves each whisker exactly every step. Its iterative
+//     one (dWorldQuickStep) was measured 10-80 % off the beam theory at 30-150 iterations.
+//   - Whisker-surface contacts are stiff implicit spring-dampers with Coulomb friction
+//     (Options::contact_stiffness, friction). Whiskers collide with the World's walls and legs
+//     only (the only things built, §3 of ARCHITECTURE.md); not with each other or with the base.
+//     No gravity: the contacts are with vertical prisms and so horizontal, and the real
+//     whisker's static sag is the rest angle the Hall sensor's calibration removes.
+//   - Stability: joint error correction 0.8 per step, a little constraint force mixing to keep
+//     the LCP regular, a cap on contact correction speed, and adaptive substeps when a capsule
+//     turns fast (Options::max_rotation_per_substep); docs/WHISKERS.md has the measurements.
+//
+// Ownership: the robot owns every ODE handle it creates (unique_ptr with deleters) and holds a
+// reference to the World, which must outlive it. Non-copyable.
+// Thread-safety: none, and not even across instances: this ODE build keeps its collision scratch
+// global, so every World and WhiskeredRobot must be used from one thread at a time.
+// Allocation: construction and place() allocate; step() does not after its first few calls
+// (the contact buffer is sized at construction, ODE reuses its contact-joint arena and step
+// memory once they have grown to the largest contact set seen).
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "crunch/behaviour/mobile_base.h"
+#include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
+#include "crunch/mapping/shapelet.h"
+#include "crunch_sim/world.h"
+
+// ODE handle types (see world.h); <ode/ode.h> stays in the .cc.
+struct dxWorld;
+struct dxBody;
+struct dxJoint;
+struct dxJointGroup;
+
+namespace crunch::sim {
+
+// One whisker: geometry, material and follicle (paper §2.1). All lengths in metres.
+struct WhiskerBeam {
+  double total_length = 0.160;     // whole printed whisker, §2.1
+  double external_length = 0.140;  // outside the follicle, §2.4; s runs over [0, this]
+  double base_diameter = 1.45e-3;  // at the magnet end of the whisker, §2.1
+  double tip_diameter = 0.30e-3;   // §2.1
+  // NanoCure RCP25 photopolymer (§2.1). No published modulus for it was found; 2.5 GPa is the
+  // middle of the 2-3 GPa of stiff acrylate SLA photopolymers (docs/WHISKERS.md). Pa.
+  double youngs_modulus = 2.5e9;
+  double density = 1150.0;  // kg/m^3, cured acrylate photopolymer
+  // The polyurethane plug as a rotational spring, N m/rad. Chosen (docs/WHISKERS.md) so that
+  // near-tip contacts in a body whisk turn the base a few degrees, and the plug takes about
+  // half of the compliance at the tip (C(0.14 m): 6.5 of 17.6 m/N).
+  double follicle_stiffness = 3.0e-3;
+  // N m s/rad: damping ratio 0.3 of the first mode (about 16 Hz with the default beam);
+  // polyurethane is lossy.
+  double follicle_damping = 1.75e-5;
+  // Stiffness-proportional material damping of the shaft joints, kd_i = this * k_i, seconds.
+  // Damps the fast segment modes (zeta ~ 0.2 at the tip) while leaving the slow ones to the plug.
+  double material_damping_time = 5.0e-4;
+
+  // okStatus(), or an Error naming the bad field.
+  Status validate() const;
+
+  double innerLength() const { return total_length - external_length; }
+  // Diameter at distance s from the follicle exit (s may run past [0, external_length]; the
+  // linear taper is extrapolated).
+  double diameter(double s) const;
+  // Second moment of area I(s) = pi D(s)^4 / 64, m^4.
+  double secondMoment(double s) const;
+  // Bending stiffness E I(s), N m^2.
+  double bendingStiffness(double s) const;
+  // integral_0^d (d - s)^2 / (E I(s)) ds: lateral compliance at d of the shaft on a rigid base,
+  // m/N (composite Simpson, relative error below 1e-9). d in [0, external_length].
+  double shaftCompliance(double d) const;
+  // C(d) = d^2 / k_base + shaftCompliance(d), m/N.
+  double compliance(double d) const;
+  // Base moment M = delta d / C(d) for a lateral push delta (m) at distance d (m), N m.
+  double baseMoment(double delta, double d) const;
+  // Base angle theta = M / k_base for the same push, radians.
+  double baseAngle(double delta, double d) const;
+  // Rotational stiffness of the shaft between a and b under a uniform moment,
+  // 1 / integral_a^b ds / (E I(s)), N m/rad. 0 <= a < b.
+  double elementStiffness(double a, double b) const;
+  // The compliance centroid of [a, b]: integral s / EI ds over integral 1 / EI ds. A rotational
+  // spring of elementStiffness(a, b) placed there matches the element's lateral compliance
+  // (d - s)^2 / EI at any d >= b to within the element's second moment about that point.
+  double complianceCentroid(double a, double b) const;
+  // Mass of the shaft between a and b (a frustum of the taper), kg.
+  double mass(double a, double b) const;
+};
+
+// A base's two deflection angles: what the follicle's magnet does and the Hall sensor sees.
+struct BaseAngles {
+  double horizontal = 0.0;  // in-plane bending, about the vertical, CCW from above, radians
+  double vertical = 0.0;    // out of plane, positive up, radians
+};
+
+// Ground truth about one whisker's contact (for labels, tests and calibration).
+struct WhiskerContact {
+  double r = 0.0;   // distance from the base along the (bent) whisker to the contact, metres
+  Vec2 point;       // contact point in the arena plane
+  Vec2 normal;      // unit, in the plane, out of the surface toward the whisker
+  double depth = 0.0;  // ODE's penetration depth, metres
+  int segment = 0;     // which capsule (0 at the base)
+};
+
+class WhiskeredRobot final : public MobileBase {
+ public:
+  struct Options {
+    WhiskerBeam beam;
+    // Beam elements per whisker (elements + 1 capsules) and how they shorten toward the tip:
+    // element j ends at L (1 - (1 - j/elements)^element_grading). 4 elements graded 1.3 put
+    // the base angle within 4.4 % of beam theory over 90-140 mm (10 elements: 0.3 %) at a cost
+    // the 10x real-time goal allows; the direct solver's cost grows with the cube of its
+    // 6 (elements + 1) constraint rows (docs/WHISKERS.md charts speed against accuracy).
+    int elements = 4;
+    double element_grading = 1.3;
+    // One physics step, seconds: one 2 kHz sample period (§2.1), so step() gives one sample.
+    double dt = 0.5e-3;
+    int substeps = 1;  // ODE steps per step() at least; each is dt / substeps
+    // Adaptive refinement: a step in which some capsule turns faster than
+    // max_rotation_per_substep per substep is split further, up to max_substeps. Only whiskers
+    // flicking free of a deep bend or whipped by a full-speed spin need it.
+    int max_substeps = 8;
+    double max_rotation_per_substep = 0.03;  // radians
+    double z = 0.1;                   // whisker plane height, metres (as RaySensorModel)
+    double friction = 0.3;            // Coulomb mu whisker-surface (plastic on paint/wood)
+    int max_contacts_per_segment = 2;
+    // Largest speed ODE may use to push a penetrating contact apart, m/s: keeps a deep contact
+    // from launching the light tip segments.
+    double max_correcting_velocity = 0.2;
+    // Whisker-surface contact as a spring-damper, N/m and N s/m: stiff against the whisker
+    // (0.3 um of indentation under a 5 mm tip push) yet soft enough to keep ODE's LCP regular.
+    double contact_stiffness = 1000.0;
+    double contact_damping = 1.0;
+    double wheel_base = 0.258;      // Create wheel separation, metres (OI specification)
+    double max_wheel_speed = 0.5;   // Create, m/s per wheel (OI specification)
+
+    Status validate() const;
+  };
+
+  // Builds the robot at pose (0, 0, 0) with its whiskers at rest. Error for invalid options, a
+  // non-finite mount, or a mount whose length differs from options.beam.external_length.
+  static Result<std::unique_ptr<WhiskeredRobot>> create(const World& world,
+                                                        std::vector<WhiskerMount> mounts,
+                                                        const Options& options);
+  ~WhiskeredRobot() override;
+  WhiskeredRobot(const WhiskeredRobot&) = delete;
+  WhiskeredRobot& operator=(const WhiskeredRobot&) = delete;
+
+  // Teleports the base to `pose`, puts every whisker straight at rest, forgets contacts and
+  // stops the base (drive(0, 0)). Time keeps running (now() is monotonic). Asserts a finite pose.
+  void place(const Pose2& pose);
+
+  // Advances one Options::dt (in Options::substeps ODE steps). Does not allocate after warm-up.
+  void step();
+  // Steps until `seconds` more have passed (rounded to whole steps); returns the steps taken.
+  int run(double seconds);
+
+  // The follicle's deflection of whisker w, from the direction of its first capsule relative to
+  // its rest direction on the base. 0 <= w < whiskerCount().
+  BaseAngles baseAngles(int w) const;
+  // The contact of whisker w after the last step, if it touches anything: the one nearest the
+  // base (it carries the most moment per unit force, and a shaft contact shadows any contact
+  // beyond it). nullopt when free.
+  std::optional<WhiskerContact> contact(int w) const;
+  // Contact points on whisker w after the last step (ODE contacts, up to
+  // max_contacts_per_segment per capsule).
+  int contactCount(int w) const;
+
+  // MobileBase. drive() clamps each wheel to +-max_wheel_speed; Error for non-finite input.
+  Status drive(double v, double omega) override;
+  // The exact pose (zero odometry noise, §2.8); theta is integrated, not wrapped.
+  Pose2 odometry() const override { return pose_; }
+  // The bumper is pressed (see the top of this file).
+  bool bumped() const override { return bumped_; }
+  double now() const override { return time_; }
+
+  // Wheel speeds (left, right) in effect after clamping, m/s.
+  std::pair<double, double> wheelSpeeds() const { return {left_, right_}; }
+  // Substeps in which the bumper rule refused the base's translation.
+  long long refusedSteps() const { return refused_steps_; }
+  // Steps split into more than Options::substeps by the adaptive refinement.
+  long long refinedSteps() const { return refined_steps_; }
+  // Contacts ODE found beyond the buffer sized at construction (left out of the step; expected
+  // to stay 0: the buffer holds every capsule touching two surfaces at once).
+  long long droppedContacts() const { return dropped_contacts_; }
+
+  // Inspection, for tests and pictures.
+  int whiskerCount() const { return static_cast<int>(whiskers_.size()); }
+  int segmentCount() const { return options_.elements + 1; }
+  const std::vector<WhiskerMount>& mounts() const { return mounts_; }
+  const Options& options() const { return options_; }
+  // The whisker base (follicle) of whisker w in the world, at the whisker plane height.
+  Eigen::Vector3d basePoint(int w) const;
+  // Both ends of capsule i (0 at the base) of whisker w along its axis, in the world.
+  std::pair<Eigen::Vector3d, Eigen::Vector3d> segmentEnds(int w, int i) const;
+  // Distance along the rest whisker from the base to the start of capsule i.
+  double segmentStart(int i) const { return seg_start_[static_cast<size_t>(i)]; }
+  double segmentLength(int i) const { return seg_len_[static_cast<size_t>(i)]; }
+  double segmentRadius(int i) const { return seg_radius_[static_cast<size_t>(i)]; }
+  // Lumped stiffness of shaft joint j (1 <= j <= elements; j = 0 is the follicle), N m/rad.
+  double jointStiffness(int j) const { return joint_k_[static_cast<size_t>(j)]; }
+
+ private:
+  struct WorldDeleter {
+    void operator()(dxWorld* w) const;
+  };
+  struct BodyDeleter {
+    void operator()(dxBody* b) const;
+  };
+  struct JointDeleter {
+    void operator()(dxJoint* j) const;
+  };
+  struct JointGroupDeleter {
+    void operator()(dxJointGroup* g) const;
+  };
+  using WorldPtr = std::unique_ptr<dxWorld, WorldDeleter>;
+  using BodyPtr = std::unique_ptr<dxBody, BodyDeleter>;
+  using JointPtr = std::unique_ptr<dxJoint, JointDeleter>;
+  using JointGroupPtr = std::unique_ptr<dxJointGroup, JointGroupDeleter>;
+  using SpacePtr = std::unique_ptr<dxSpace, detail::SpaceDeleter>;
+  using GeomPtr = std::unique_ptr<dxGeom, detail::GeomDeleter>;
+
+  struct Whisker {
+    // The base's part holding this whisker: kinematic, moved with the base. One per whisker, so
+    // each whisker is its own ODE island and its own small LCP (one shared body would join all
+    // whiskers into one system, and the direct solver's cost grows with the cube of its size).
+    BodyPtr follicle;
+    std::vector<BodyPtr> bodies;  // capsules, base first
+    std::vector<GeomPtr> geoms;   // one capsule geom per body
+    std::vector<JointPtr> joints;  // joints[0] is the follicle (base body - capsule 0)
+  };
+  struct ContactRecord {
+    int whisker = 0;
+    int segment = 0;
+    double pos[3] = {0, 0, 0};
+    double normal[3] = {0, 0, 0};  // as ODE gives it for the contact joint
+    double depth = 0.0;
+  };
+
+  WhiskeredRobot(const World& world, std::vector<WhiskerMount> mounts, const Options& options);
+  void build();
+  void resetWhiskers();
+  void substep(double h);
+  int substepsNeeded() const;
+  void moveBase(double h);
+  void setBaseBodies(double v, double omega, double h);
+  void collide();
+  static void nearCallback(void* data, dxGeom* o1, dxGeom* o2);
+  void onNear(dxGeom* o1, dxGeom* o2);
+  double clearance(const Pose2& p) const;
+
+  // Declaration order is destruction order reversed: joints and geoms before their bodies,
+  // group and space before the world, ODE closed last.
+  detail::OdeLibraryRef ode_;
+  const World& world_;
+  std::vector<WhiskerMount> mounts_;
+  Options options_;
+
+  WorldPtr dworld_;
+  SpacePtr space_;  // the whisker capsules; does not own them (geoms in Whisker do)
+  JointGroupPtr contact_group_;
+  std::vector<Whisker> whiskers_;
+
+  // Rest geometry of the chain, shared by all whiskers.
+  std::vector<double> seg_start_, seg_len_, seg_radius_, seg_mass_;
+  std::vector<double> joint_s_, joint_k_, joint_kd_;  // [0] follicle, [j] shaft joint j
+
+  std::vector<ContactRecord> contacts_;  // this step's contacts, capacity fixed at construction
+  std::vector<int> contact_count_;       // per whisker
+  std::vector<dxGeom*> world_geoms_;     // the World's walls and legs
+  std::vector<double> world_aabbs_;      // 6 per world geom (ODE AABB order)
+  long long dropped_contacts_ = 0;
+
+  Pose2 pose_;
+  double v_ = 0.0, omega_ = 0.0, left_ = 0.0, right_ = 0.0;
+  double time_ = 0.0;
+  bool bumped_ = false;
+  long long refused_steps_ = 0;
+  long long refined_steps_ = 0;
+  double last_h_ = 0.0;  // substep the joint springs were set for
+  double contact_erp_ = 0.2, contact_cfm_ = 0.0;  // for last_h_
+};
+
+}  // namespace crunch::sim
