@@ -1,0 +1,47 @@
+// The signal models file: the radial-distance lines (eq. 2) and the orientation templates
+// (eq. 3) in one JSON document (docs/SIGNAL.md, "Models file").
+//
+//   {"format": "crunchbot-signal-models", "version": 1,
+//    "radial": {"external_length": 0.14, "tip_zone": 0.05,
+//               "whiskers": [{"a1": .., "a0": .., "sigma": .., "samples": n,
+//                             "f1_min": .., "f1_max": .., "r_min": .., "r_max": ..} x 4]},
+//    "orientation": {"channels": 8, "decimation": 20, "columns": 200,
+//                    "templates": [{"angle": rad, "windows": n, "data": [[columns] x 8]} ...]}}
+//
+// Reading is strict: every field required, unknown keys refused, numbers finite, counts
+// non-negative integers, sizes as declared. Every failure is an Error "<file>: <field path>:
+// <what is wrong>". Writing is atomic (temporary file, fsync, rename): a reader sees the old
+// file or the new one, never half of one.
+#pragma once
+
+#include <string>
+
+#include "crunch/core/result.h"
+#include "crunch/signal/orientation_templates.h"
+#include "crunch/signal/radial_distance.h"
+
+namespace crunch::signal {
+
+inline constexpr const char* kModelsFormat = "crunchbot-signal-models";
+inline constexpr int kModelsVersion = 1;
+
+struct SignalModels {
+  RadialModel radial;
+  OrientationModel orientation;
+};
+
+// okStatus(), or an Error naming the field (as in the file) that could not be written or read
+// back: non-finite numbers, radial options out of range, an empty or ragged orientation model.
+Status validateModels(const SignalModels& models);
+
+// The document's text. Asserts validateModels(models).
+std::string modelsToJson(const SignalModels& models);
+// Parses and checks a document; `source` names it in errors.
+Result<SignalModels> parseModelsJson(const std::string& text, const std::string& source);
+
+// Validates, then writes atomically. The Error names `path`.
+Status saveModels(const SignalModels& models, const std::string& path);
+// Reads and parses `path`. A missing or unreadable file is an Error naming `path`.
+Result<SignalModels> loadModels(const std::string& path);
+
+}  // namespace crunch::signal

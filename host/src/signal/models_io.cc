@@ -1,0 +1,256 @@
+#include "crunch/signal/models_io.h"
+
+#include <cassert>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <system_error>
+
+#include "core/json_fields.h"
+#include "crunch/mapping/map_io.h"  // writeFileAtomic
+
+namespace crunch::signal {
+
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;
+using Json = json_fields::Json;
+using namespace json_fields;
+
+std::string whiskerPath(int w) { return element("radial.whiskers", static_cast<size_t>(w)); }
+std::string templatePath(size_t k) { return element("orientation.templates", k); }
+
+}  // namespace
+
+Status validateModels(const SignalModels& models) {
+  const RadialModel& radial = models.radial;
+  if (Status s = radial.options.validate(); !s.ok()) return s;
+  for (int w = 0; w < kWhiskers; ++w) {
+    const RadialLine& l = radial.whiskers[w];
+    const std::string p = whiskerPath(w);
+    const std::pair<const char*, double> numbers[] = {
+        {"a1", l.a1},         {"a0", l.a0},       {"sigma", l.sigma}, {"f1_min", l.f1_min},
+        {"f1_max", l.f1_max}, {"r_min", l.r_min}, {"r_max", l.r_max}};
+    for (const auto& [key, v] : numbers) {
+      if (!std::isfinite(v)) return Error{member(p, key) + ": not a finite number"};
+    }
+    if (l.sigma < 0.0) return Error{member(p, "sigma") + ": negative"};
+    if (l.samples < 0) return Error{member(p, "samples") + ": negative"};
+  }
+  const OrientationModel& o = models.orientation;
+  if (o.decimation < 1) return Error{"orientation.decimation: expected >= 1"};
+  if (o.columns < 1) return Error{"orientation.columns: expected >= 1"};
+  if (o.templates.empty()) return Error{"orientation.templates: expected at least one template"};
+  for (size_t k = 0; k < o.templates.size(); ++k) {
+    const OrientationTemplate& t = o.templates[k];
+    if (!std::isfinite(t.angle)) return Error{member(templatePath(k), "angle") + ": not finite"};
+    if (t.windows < 0) return Error{member(templatePath(k), "windows") + ": negative"};
+    if (t.mean.cols() != o.columns) {
+      return Error{member(templatePath(k), "data") + ": " + std::to_string(t.mean.cols()) +
+                   " columns, the model declares " + std::to_string(o.columns)};
+    }
+    if (!t.mean.allFinite()) return Error{member(templatePath(k), "data") + ": not finite"};
+  }
+  return okStatus();
+}
+
+std::string modelsToJson(const SignalModels& models) {
+  assert(validateModels(models).ok());
+  OrderedJson whiskers = OrderedJson::array();
+  for (const RadialLine& l : models.radial.whiskers) {
+    whiskers.push_back({{"a1", l.a1},
+                        {"a0", l.a0},
+                        {"sigma", l.sigma},
+                        {"samples", l.samples},
+                        {"f1_min", l.f1_min},
+                        {"f1_max", l.f1_max},
+                        {"r_min", l.r_min},
+                        {"r_max", l.r_max}});
+  }
+  OrderedJson templates = OrderedJson::array();
+  for (const OrientationTemplate& t : models.orientation.templates) {
+    OrderedJson rows = OrderedJson::array();
+    for (int c = 0; c < kChannels; ++c) {
+      OrderedJson row = OrderedJson::array();
+      for (Eigen::Index j = 0; j < t.mean.cols(); ++j) row.push_back(t.mean(c, j));
+      rows.push_back(std::move(row));
+    }
+    templates.push_back({{"angle", t.angle}, {"windows", t.windows}, {"data", std::move(rows)}});
+  }
+  const OrderedJson doc = {{"format", kModelsFormat},
+                           {"version", kModelsVersion},
+                           {"radial",
+                            {{"external_length", models.radial.options.external_length},
+                             {"tip_zone", models.radial.options.tip_zone},
+                             {"whiskers", std::move(whiskers)}}},
+                           {"orientation",
+                            {{"channels", kChannels},
+                             {"decimation", models.orientation.decimation},
+                             {"columns", models.orientation.columns},
+                             {"templates", std::move(templates)}}}};
+  // Templates are long rows of numbers: no indentation keeps the file compact; nlohmann writes
+  // doubles with enough digits to read back bit-exact.
+  return doc.dump() + "\n";
+}
+
+namespace {
+
+const Json& required(const Json& obj, const std::string& path, std::string_view key) {
+  const auto it = obj.find(key);
+  if (it == obj.end()) fail(member(path, key), "missing (required)");
+  return *it;
+}
+
+// A non-negative integer no larger than `max`.
+int count(const Json& j, const std::string& path, int max = std::numeric_limits<int>::max()) {
+  if (!j.is_number_unsigned() || j.get<std::uint64_t>() > static_cast<std::uint64_t>(max)) {
+    fail(path, "expected an integer from 0 to " + std::to_string(max) + ", got " + j.dump());
+  }
+  return static_cast<int>(j.get<std::uint64_t>());
+}
+
+const Json& array(const Json& j, const std::string& path, size_t expected_size) {
+  expectArray(j, path);
+  if (j.size() != expected_size) {
+    fail(path, "expected " + std::to_string(expected_size) + " elements, got " +
+                   std::to_string(j.size()));
+  }
+  return j;
+}
+
+RadialModel parseRadial(const Json& j) {
+  const std::string path = "radial";
+  expectObject(j, path, {"external_length", "tip_zone", "whiskers"});
+  RadialModel m;
+  m.options.external_length = requiredNumber(j, path, "external_length");
+  m.options.tip_zone = requiredNumber(j, path, "tip_zone");
+  if (Status s = m.options.validate(); !s.ok()) {
+    // The option's own message starts with "radial.<field>: ".
+    const std::string& msg = s.error().message;
+    const size_t colon = msg.find(": ");
+    fail(msg.substr(0, colon), msg.substr(colon + 2));
+  }
+  const Json& whiskers = array(required(j, path, "whiskers"), "radial.whiskers", kWhiskers);
+  for (int w = 0; w < kWhiskers; ++w) {
+    const std::string p = whiskerPath(w);
+    const Json& o = whiskers[static_cast<size_t>(w)];
+    expectObject(o, p, {"a1", "a0", "sigma", "samples", "f1_min", "f1_max", "r_min", "r_max"});
+    RadialLine& l = m.whiskers[w];
+    l.a1 = requiredNumber(o, p, "a1");
+    l.a0 = requiredNumber(o, p, "a0");
+    l.sigma = requiredNumber(o, p, "sigma");
+    if (l.sigma < 0.0) fail(member(p, "sigma"), "expected a non-negative number");
+    l.samples = count(required(o, p, "samples"), member(p, "samples"));
+    l.f1_min = requiredNumber(o, p, "f1_min");
+    l.f1_max = requiredNumber(o, p, "f1_max");
+    if (l.f1_max < l.f1_min) fail(member(p, "f1_max"), "less than f1_min");
+    l.r_min = requiredNumber(o, p, "r_min");
+    l.r_max = requiredNumber(o, p, "r_max");
+    if (l.r_max < l.r_min) fail(member(p, "r_max"), "less than r_min");
+  }
+  return m;
+}
+
+OrientationModel parseOrientation(const Json& j) {
+  const std::string path = "orientation";
+  expectObject(j, path, {"channels", "decimation", "columns", "templates"});
+  const int channels = count(required(j, path, "channels"), "orientation.channels");
+  if (channels != kChannels) {
+    fail("orientation.channels",
+         "expected " + std::to_string(kChannels) + ", got " + std::to_string(channels));
+  }
+  OrientationModel m;
+  // A window is at most a few minutes at 2 kHz: bound the sizes so a corrupt file cannot ask
+  // for gigabytes.
+  constexpr int kMaxColumns = 1 << 20;
+  m.decimation = count(required(j, path, "decimation"), "orientation.decimation", kMaxColumns);
+  if (m.decimation < 1) fail("orientation.decimation", "expected at least 1");
+  m.columns = count(required(j, path, "columns"), "orientation.columns", kMaxColumns);
+  if (m.columns < 1) fail("orientation.columns", "expected at least 1");
+  const Json& templates = required(j, path, "templates");
+  expectArray(templates, "orientation.templates");
+  if (templates.empty()) fail("orientation.templates", "expected at least one template");
+  for (size_t k = 0; k < templates.size(); ++k) {
+    const std::string p = templatePath(k);
+    const Json& t = templates[k];
+    expectObject(t, p, {"angle", "windows", "data"});
+    OrientationTemplate tmpl;
+    tmpl.angle = requiredNumber(t, p, "angle");
+    tmpl.windows = count(required(t, p, "windows"), member(p, "windows"));
+    const std::string dp = member(p, "data");
+    const Json& rows = array(required(t, p, "data"), dp, kChannels);
+    tmpl.mean.resize(kChannels, m.columns);
+    for (int c = 0; c < kChannels; ++c) {
+      const std::string rp = element(dp, static_cast<size_t>(c));
+      const Json& row = array(rows[static_cast<size_t>(c)], rp, static_cast<size_t>(m.columns));
+      for (int col = 0; col < m.columns; ++col) {
+        tmpl.mean(c, col) =
+            number(row[static_cast<size_t>(col)], element(rp, static_cast<size_t>(col)));
+      }
+    }
+    m.templates.push_back(std::move(tmpl));
+  }
+  return m;
+}
+
+SignalModels parseDocument(const Json& doc) {
+  expectObject(doc, "", {"format", "version", "radial", "orientation"});
+  const Json& format = required(doc, "", "format");
+  if (!format.is_string() || format.get<std::string>() != kModelsFormat) {
+    fail("format", std::string("expected \"") + kModelsFormat + "\", got " + format.dump());
+  }
+  // The version first: another version may lay out everything else differently.
+  const Json& version = required(doc, "", "version");
+  if (!version.is_number_integer() || version.get<std::int64_t>() != kModelsVersion) {
+    fail("version", "unsupported version " + version.dump() + " (this build reads version " +
+                        std::to_string(kModelsVersion) + ")");
+  }
+  SignalModels models;
+  models.radial = parseRadial(required(doc, "", "radial"));
+  models.orientation = parseOrientation(required(doc, "", "orientation"));
+  return models;
+}
+
+}  // namespace
+
+Result<SignalModels> parseModelsJson(const std::string& text, const std::string& source) {
+  Json doc;
+  try {
+    doc = Json::parse(text);
+  } catch (const Json::exception& e) {
+    return Error{source + ": " + withoutExceptionTag(e.what())};
+  }
+  try {
+    return parseDocument(doc);
+  } catch (const FieldError& e) {
+    return Error{describe(source, e)};
+  }
+}
+
+Status saveModels(const SignalModels& models, const std::string& path) {
+  if (Status s = validateModels(models); !s.ok()) {
+    return Error{path + ": signal models not written: " + s.error().message};
+  }
+  return writeFileAtomic(path, modelsToJson(models));
+}
+
+Result<SignalModels> loadModels(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    return Error{path + ": cannot read signal models file: is a directory"};
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Error{path + ": cannot read signal models file: " + std::strerror(errno)};
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) return Error{path + ": cannot read signal models file: " + std::strerror(errno)};
+  return parseModelsJson(text.str(), path);
+}
+
+}  // namespace crunch::signal
