@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <memory>
 #include <vector>
 
@@ -52,6 +53,12 @@ double worstBeamError(const WhiskeredRobot::Options& o) {
     worst = std::max(worst, std::abs(r.value().relativeError()));
   }
   return worst;
+}
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 struct RunStats {
@@ -95,8 +102,13 @@ void runWhisk(benchmark::State& state, const crunch::Pose2& start) {
   whisk(*robot, start, warm);  // warm-up: ODE's step and contact arenas grown
   RunStats stats;
   double simulated = 0.0;
+  const double cpu0 = threadCpuSeconds();
   for (auto _ : state) simulated += whisk(*robot, start, stats);
+  const double cpu = threadCpuSeconds() - cpu0;
+  // Simulated seconds per second of wall time, and per second of this thread's CPU time (the
+  // latter is what one core delivers when the machine is shared and the thread gets preempted).
   state.counters["rtf"] = benchmark::Counter(simulated, benchmark::Counter::kIsRate);
+  state.counters["rtf_cpu"] = simulated / cpu;
   // Microseconds of real time per 0.5 ms step: (steps / 1e6 per second) inverted.
   state.counters["us_per_step"] =
       benchmark::Counter(1e-6 * static_cast<double>(stats.steps),
