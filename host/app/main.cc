@@ -18,6 +18,10 @@ int main(int argc, char** argv) {
   app.add_option("--sensor-model", opt.sensor_model, "physics | gaussian | ideal")
       ->check(CLI::IsMember({"physics", "gaussian", "ideal"}))
       ->capture_default_str();
+  app.add_option("--models", opt.models_path,
+                 "signal models for --sensor-model physics (default: the shipped "
+                 "models/sim_models.json)")
+      ->check(CLI::ExistingFile);
   app.add_option("--noise", opt.noise, "ideal | realistic | noisy")
       ->check(CLI::IsMember({"ideal", "realistic", "noisy"}))
       ->capture_default_str();

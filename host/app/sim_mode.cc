@@ -11,6 +11,8 @@
 #include "crunch/mapping/map_io.h"
 #include "crunch/render/map_render.h"
 #include "crunch/scene/scene.h"
+#include "crunch/signal/models_io.h"
+#include "crunch_sim/physics_sensor.h"
 #include "crunch_sim/ray_sensor.h"
 #include "crunch_sim/world.h"
 
@@ -25,8 +27,28 @@ std::optional<NoiseRegime> noiseByName(const std::string& name) {
   return std::nullopt;
 }
 
+nlohmann::ordered_json accuracyJson(const Evaluation& ev) {
+  return {{"true_tables", ev.true_tables},
+          {"fused_tables", ev.fused_tables},
+          {"matched", ev.matched},
+          {"precision", ev.precision},
+          {"recall", ev.recall},
+          {"f1", ev.f1},
+          {"mean_position_error_m", ev.mean_position_error},
+          {"mean_angle_error_rad", ev.mean_angle_error}};
+}
+
+// The physics path's own measurements, and the gaussian run on the same scene beside them.
+struct PhysicsSummary {
+  sim::ReportErrors errors;
+  std::string models;
+  Evaluation gaussian;
+  double gaussian_s = 0.0;
+};
+
 std::string reportJson(const Scene& scene, const Map& map, const Evaluation& ev,
-                       const SimOptions& opt, const ModelParams& model, const NoiseRegime& noise, double total_s) {
+                       const SimOptions& opt, const ModelParams& model, const NoiseRegime& noise,
+                       double total_s, const std::optional<PhysicsSummary>& physics) {
   nlohmann::ordered_json j;
   j["schema"] = "crunch.report/1";
   j["scene"] = scene.source;
@@ -54,6 +76,26 @@ std::string reportJson(const Scene& scene, const Map& map, const Evaluation& ev,
                  {"rejected_reports", map.stats.rejected_reports},
                  {"proposals", map.stats.proposals}};
   j["timings_s"] = {{"sense_and_infer", map.stats.wall_s}, {"total", total_s}};
+  if (physics) {
+    const sim::ReportErrors& e = physics->errors;
+    j["physics"] = {
+        {"models", physics->models},
+        {"reports_scored", e.reports},
+        {"reports_unscored", e.unscored},
+        {"sigma_r_m", e.sigmaR()},
+        {"mean_r_error_m", e.meanR()},
+        {"sigma_phi_rad", e.sigmaPhi()},
+        {"mean_phi_error_rad", e.meanPhi()},
+        {"whisks", e.whisks},
+        {"episodes", e.episodes},
+        {"touches_without_radial_estimate", e.no_radial},
+        {"touches_without_orientation", e.no_orientation},
+        {"simulated_s", e.simulated_s},
+        {"gaussian_same_scene",
+         {{"noise", "realistic"},
+          {"accuracy", accuracyJson(physics->gaussian)},
+          {"sense_and_infer_s", physics->gaussian_s}}}};
+  }
   const SamplerOptions& s = opt.mapping.sampler;
   j["model"] = {{"sigma_r_shapelet", model.sigma_r_shapelet},
                 {"sigma_theta_shapelet", model.sigma_theta_shapelet},
@@ -108,12 +150,20 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     }
     scene = std::move(loaded).value();
   }
-  if (opt.sensor_model == "physics") {
-    err << "crunchhost: --sensor-model physics: the bending-whisker physics and classifier chain "
-           "is not built yet (issue 4); use gaussian or ideal\n";
-    return 2;
+  const bool physics = opt.sensor_model == "physics";
+  std::optional<signal::SignalModels> models;
+  const std::string models_path =
+      opt.models_path.empty() ? std::string(CRUNCH_DEFAULT_MODELS) : opt.models_path;
+  if (physics) {
+    auto loaded = signal::loadModels(models_path);
+    if (!loaded) {
+      err << "crunchhost: --sensor-model physics: " << loaded.error().message
+          << " (train models with `crunchhost train`, or pass --models FILE)\n";
+      return 2;
+    }
+    models = std::move(loaded).value();
   }
-  if (opt.sensor_model != "gaussian" && opt.sensor_model != "ideal") {
+  if (!physics && opt.sensor_model != "gaussian" && opt.sensor_model != "ideal") {
     err << "crunchhost: --sensor-model: unknown model '" << opt.sensor_model
         << "' (expected physics, gaussian or ideal)\n";
     return 2;
@@ -125,6 +175,10 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     return 2;
   }
   if (opt.sensor_model == "ideal") noise = NoiseRegime::ideal();
+  // The blackboard's sensor sigmas (eq. 12) for the physics path: the paper's measured
+  // classifier errors (Table 1 all whiskers, Fig. 10), not an injected noise.
+  if (physics) noise = NoiseRegime{"physics", 0.00498, 21.2 * kPi / 180.0};
+  // The physics path has no injected noise: its noise is what its classifiers make (§4).
   if (const std::string why = opt.mapping.sampler.validate(); !why.empty()) {
     err << "crunchhost: sampler options: " << why << "\n";
     return 2;
@@ -138,7 +192,18 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   auto world = sim::World::build(scene);
   int skipped = 0;
   const std::vector<Pose2> poses = world->reachablePoses(scene.poses, &skipped);
-  sim::RaySensorModel sensor(*world, defaultWhiskerArray(), *noise, {});
+  sim::RaySensorModel ray_sensor(*world, defaultWhiskerArray(), *noise, {});
+  std::unique_ptr<sim::PhysicsSensorModel> physics_sensor;
+  if (physics) {
+    auto created = sim::PhysicsSensorModel::create(*world, defaultWhiskerArray(), *models, poses,
+                                                   sim::physicsSensorOptions(opt.seed));
+    if (!created) {
+      err << "crunchhost: --sensor-model physics: " << created.error().message << "\n";
+      return 2;
+    }
+    physics_sensor = std::move(created).value();
+  }
+  SensorModel& sensor = physics ? static_cast<SensorModel&>(*physics_sensor) : ray_sensor;
   MappingOptions mopt = opt.mapping;
   mopt.seed = opt.seed;
   // Eq. 12's sigma_r^S, sigma_theta^S "model sensor noise": never below the regime's own.
@@ -148,6 +213,20 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   mopt.progress = [&](int done, int total) { bar(done, total); };
   const Map map = runMapping(sensor, poses, skipped, mopt);
   const Evaluation ev = evaluate(map, scene);
+  std::optional<PhysicsSummary> physics_summary;
+  if (physics) {
+    // The gaussian shortcut on the same scene and seed, for report.json's comparison.
+    PhysicsSummary ps;
+    ps.errors = physics_sensor->errors();
+    ps.models = models_path;
+    sim::RaySensorModel reference(*world, defaultWhiskerArray(), NoiseRegime::realistic(), {});
+    MappingOptions ref_opt = mopt;
+    ref_opt.progress = nullptr;
+    const Map ref_map = runMapping(reference, poses, skipped, ref_opt);
+    ps.gaussian = evaluate(ref_map, scene);
+    ps.gaussian_s = ref_map.stats.wall_s;
+    physics_summary = ps;
+  }
 
   // ---- Write: each file complete or not at all.
   if (auto s = ensureDirectory(opt.out_dir); !s) {
@@ -165,7 +244,8 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
       [&] { return renderMapPng(map, scene, dir + "map.png", ropt); },
       [&] {
         return writeFileAtomic(dir + "report.json",
-                               reportJson(scene, map, ev, opt, mopt.model, *noise, total_s));
+                               reportJson(scene, map, ev, opt, mopt.model, *noise, total_s,
+                                          physics_summary));
       }};
   for (const auto& write : writes) {
     if (const Status status = write(); !status) {

@@ -18,6 +18,9 @@ struct SimOptions {
   std::string noise = "realistic";        // ideal | realistic | noisy
   uint64_t seed = 1;
   std::string out_dir = "out";
+  // --sensor-model physics: the trained signal models (crunchhost train); empty: the shipped
+  // models/sim_models.json of the source tree.
+  std::string models_path;
   bool json_progress = false;  // one JSON object per line on stdout instead of a progress bar
   MappingOptions mapping;
 };

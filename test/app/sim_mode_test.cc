@@ -1,6 +1,7 @@
 #include "sim_mode.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -119,15 +120,47 @@ TEST_CASE("crunchhost --sim: a bad scene is exit 2 naming file and field, nothin
   CHECK_FALSE(fs::exists(dir));
 }
 
-TEST_CASE("crunchhost --sim: the physics sensor model says it is not built yet", "[app]") {
-  const fs::path dir = freshDir("physics");
+TEST_CASE("crunchhost --sim: physics with a missing models file is exit 2 naming it",
+          "[app]") {
+  const fs::path dir = freshDir("physics_missing");
   app::SimOptions opt;
   opt.sensor_model = "physics";
+  opt.models_path = (freshDir("no_models") / "models.json").string();
   opt.out_dir = dir.string();
   const RunResult r = run(opt);
   CHECK(r.code == 2);
-  CHECK(r.err.find("issue 4") != std::string::npos);
+  CHECK(r.err.find(opt.models_path) != std::string::npos);
+  CHECK(r.err.find("crunchhost train") != std::string::npos);
   CHECK_FALSE(fs::exists(dir));
+}
+
+// The whole physics chain: ODE whiskers -> Hall model -> firmware on virtual boards -> bridge
+// decoder -> signal pipeline with the shipped models -> shapelets -> blackboard -> map.
+TEST_CASE("crunchhost --sim --sensor-model physics: end to end on one table", "[app]") {
+  const fs::path dir = freshDir("physics_one_table");
+  app::SimOptions opt;
+  opt.sensor_model = "physics";
+  opt.scene_path = std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/physics_one_table.json";
+  opt.out_dir = dir.string();
+  const RunResult r = run(opt);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const nlohmann::json rep = report(dir);
+  REQUIRE(rep.contains("physics"));
+  const auto& ph = rep["physics"];
+  // Contacts were made, classified and scored against the simulator's truth.
+  CHECK(ph["whisks"].get<int>() == rep["counts"]["poses"].get<int>() -
+                                       rep["counts"]["skipped_poses"].get<int>());
+  CHECK(ph["reports_scored"].get<int>() >= 10);
+  CHECK(std::isfinite(ph["sigma_r_m"].get<double>()));
+  CHECK(std::isfinite(ph["sigma_phi_rad"].get<double>()));
+  // Reports are where the whiskers are: radial errors of the order of the whisker's reach, not
+  // of the arena (the bound is loose on purpose; docs/TRAINING.md has the measured sigma).
+  CHECK(ph["sigma_r_m"].get<double>() < 0.05);
+  CHECK(rep["counts"]["shapelets"].get<int>() > 0);
+  CHECK(rep["physics"]["gaussian_same_scene"]["accuracy"].contains("recall"));
+  CHECK(fs::exists(dir / "map.json"));
+  CHECK(fs::exists(dir / "map.png"));
 }
 
 TEST_CASE("crunchhost --sim: an empty arena gives an empty, valid map", "[app]") {

@@ -1,0 +1,114 @@
+// The physics sensor model (`crunchhost --sim --sensor-model physics`, ARCHITECTURE.md §2):
+// at each pose the simulated robot performs the in-place body whisk (§2.3, behaviour/
+// body_whisk.h) with bending ODE whiskers, and the reports come out of the paper's own
+// classifiers — eq. 1-2 radial distance and eq. 3 orientation templates — fed through the
+// Hall model, the firmware on virtual whisker boards, the bridge decoder and the signal
+// pipeline (WhiskerRig). Its noise is what those classifiers make; nothing is added.
+//
+// Reports. One whisk may give several contact episodes (the whisker meets the object on the
+// toward and on the return pass); each whisker reports at most once per whisk, from the episode
+// in which its peak deflection f1 was largest (the paper's peak over the whisk, eq. 1):
+//   r     the radial model's estimate (eq. 2), clamped to [0, external length];
+//   phi   the orientation template's angle (eq. 3), which is relative to the heading at the
+//         episode's first contact, turned into the frame of the robot at this whisker's peak;
+//   robot the odometry pose at the peak sample (exact in the simulator, §2.8).
+// A whisker without a radial estimate, or an episode without an orientation (window cut short),
+// gives no report; both are counted.
+//
+// Negative evidence: every ~0.5 degrees of the whisk, a whisker whose detector saw no contact
+// within +-0.1 s (the smoothing lags the physics by ~14 ms) contributes its straight rest ray.
+//
+// Scoring: against the simulator's ground truth at the same peak (WhiskerTruth), the reports'
+// errors in r and phi are accumulated (errors()), for report.json's measured sigma_r, sigma_phi.
+//
+// Ownership: owns its WhiskerRig; references the World, which must outlive it.
+// Thread-safety: none (ODE). Allocation: sense() reuses its buffers after the first poses.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "crunch/mapping/sensor_model.h"
+#include "crunch/signal/models_io.h"
+#include "crunch_sim/whisker_rig.h"
+#include "crunch_sim/world.h"
+
+namespace crunch::sim {
+
+// Errors of the reports against the simulator's truth.
+struct ReportErrors {
+  int reports = 0;             // reports scored (the truth saw the whisker touch)
+  int unscored = 0;            // reports whose whisker the truth never saw touching
+  double sum_r = 0.0, sum_r2 = 0.0;      // r_hat - r_true, metres
+  double sum_phi = 0.0, sum_phi2 = 0.0;  // phi_hat - phi_true wrapped to [-pi/2, pi/2), rad
+  int whisks = 0;
+  int episodes = 0;
+  int no_radial = 0;           // touched whiskers without an r estimate
+  int no_orientation = 0;      // touched whiskers whose episode had no orientation
+  double simulated_s = 0.0;    // simulated time spent sensing
+
+  double meanR() const { return reports ? sum_r / reports : 0.0; }
+  double sigmaR() const;       // root mean square error, metres
+  double meanPhi() const { return reports ? sum_phi / reports : 0.0; }
+  double sigmaPhi() const;     // root mean square error, radians
+};
+
+class PhysicsSensorModel final : public SensorModel {
+ public:
+  struct Options {
+    WhiskerRig::Options rig;  // must be the options the models were trained with
+    double max_settle_s = 4.0;  // after the whisk, wait at most this for the episode to end
+    Status validate() const;
+  };
+
+  // Builds the rig (powering the boards up and calibrating at rest at the first pose of
+  // `clear_candidates` where no whisker touches anything) and sets the models. Errors: invalid
+  // options or models, or no clear start pose.
+  static Result<std::unique_ptr<PhysicsSensorModel>> create(
+      const World& world, std::vector<WhiskerMount> mounts, const signal::SignalModels& models,
+      const std::vector<Pose2>& clear_candidates, const Options& options);
+
+  // The whisk at `pose`. `rng` is not used: the noise comes from the Hall model's own seeded
+  // stream (Options::rig.seed) and the classifiers.
+  void sense(const Pose2& pose, Rng& rng, std::vector<ContactReport>& out) override;
+  const std::vector<WhiskerMount>& mounts() const override { return mounts_; }
+  void freeRays(std::vector<FreeRay>& out) const override {
+    out.insert(out.end(), free_.begin(), free_.end());
+  }
+
+  const ReportErrors& errors() const { return errors_; }
+  const WhiskerRig& rig() const { return *rig_; }
+
+ private:
+  PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig, std::vector<WhiskerMount> mounts,
+                     const Options& options);
+  void takeEpisode(const signal::ContactEpisode& episode);
+
+  struct Best {
+    bool have = false;
+    double f1 = 0.0;
+    ContactReport report;
+    bool scored = false;
+    double err_r = 0.0, err_phi = 0.0;
+    bool has_r = false, has_phi = false;
+  };
+  struct Sample {
+    Pose2 pose;
+    std::uint32_t mask = 0;
+  };
+
+  std::unique_ptr<WhiskerRig> rig_;
+  std::vector<WhiskerMount> mounts_;
+  Options options_;
+  std::vector<Best> best_;
+  std::vector<Sample> samples_;
+  std::vector<FreeRay> free_;
+  ReportErrors errors_;
+};
+
+// The options the shipped models were trained with (docs/TRAINING.md), with the Hall noise
+// seeded by `seed`.
+PhysicsSensorModel::Options physicsSensorOptions(std::uint64_t seed);
+
+}  // namespace crunch::sim
