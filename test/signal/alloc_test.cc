@@ -7,10 +7,8 @@
 
 #include "crunch/signal/pipeline.h"
 #include "synthetic.h"
+#include "support/count_allocations.h"
 
-namespace {
-long long g_allocations = 0;
-}
 
 // Eigen's dynamic matrices take their memory from malloc, not operator new, so malloc is
 // counted too (glibc: the executable's malloc interposes, __libc_malloc is the real one).
@@ -43,23 +41,6 @@ void* realloc(void* p, std::size_t n) noexcept {
 #define CRUNCH_COUNTS_MALLOC 1
 #endif
 
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  ++g_allocations;
-  return std::malloc(n ? n : 1);
-}
-void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
-void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 
 using namespace crunch;
 using namespace crunch::signal;
