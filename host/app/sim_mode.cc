@@ -55,20 +55,13 @@ std::string reportJson(const Scene& scene, const Map& map, const Evaluation& ev,
   j["sensor_model"] = opt.sensor_model;
   j["noise"] = {{"name", noise.name}, {"sigma_r", noise.sigma_r}, {"sigma_phi", noise.sigma_phi}};
   j["seed"] = opt.seed;
-  j["accuracy"] = {
-      {"true_tables", ev.true_tables},
-      {"fused_tables", ev.fused_tables},
-      {"matched", ev.matched},
-      {"precision", ev.precision},
-      {"recall", ev.recall},
-      {"f1", ev.f1},
-      {"mean_position_error_m", ev.mean_position_error},
-      {"mean_angle_error_rad", ev.mean_angle_error},
-      {"per_pose_tables", ev.per_pose_tables},
-      {"per_pose_match_fraction", ev.per_pose_match_fraction},
-      {"phantoms_near_walls", ev.phantoms_near_walls},
-      {"phantoms_elsewhere", ev.phantoms_elsewhere},
-      {"match_tolerance", {{"position_m", 0.15}, {"angle_rad", 15.0 * kPi / 180.0}}}};
+  nlohmann::ordered_json accuracy = accuracyJson(ev);
+  accuracy["per_pose_tables"] = ev.per_pose_tables;
+  accuracy["per_pose_match_fraction"] = ev.per_pose_match_fraction;
+  accuracy["phantoms_near_walls"] = ev.phantoms_near_walls;
+  accuracy["phantoms_elsewhere"] = ev.phantoms_elsewhere;
+  accuracy["match_tolerance"] = {{"position_m", 0.15}, {"angle_rad", 15.0 * kPi / 180.0}};
+  j["accuracy"] = accuracy;
   j["counts"] = {{"poses", map.stats.poses},
                  {"skipped_poses", map.stats.skipped_poses},
                  {"inferring_poses", map.per_pose.size()},
