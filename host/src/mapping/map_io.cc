@@ -2,13 +2,8 @@
 
 #include "core/json_fields.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -202,69 +197,7 @@ Result<Map> parseMapJson(const std::string& text, const std::string& source) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Files.
-
-namespace {
-
-// Owns a POSIX file descriptor; closes it on destruction unless closed explicitly.
-class FileDescriptor {
- public:
-  explicit FileDescriptor(int fd) : fd_(fd) {}
-  ~FileDescriptor() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  FileDescriptor(const FileDescriptor&) = delete;
-  FileDescriptor& operator=(const FileDescriptor&) = delete;
-
-  int get() const { return fd_; }
-  // Closes now and returns close()'s result: on some file systems a failed write first shows
-  // here.
-  int close() {
-    const int r = ::close(fd_);
-    fd_ = -1;
-    return r;
-  }
-
- private:
-  int fd_;
-};
-
-}  // namespace
-
-Status writeFileAtomic(const std::string& path, const std::string& content) {
-  const std::string tmp = path + ".tmp." + std::to_string(::getpid());
-  // Reads errno before unlink() can change it.
-  auto failure = [&](const char* step) -> Status {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    return Error{path + ": cannot write file: " + step + ": " + std::strerror(err)};
-  };
-
-  FileDescriptor fd(::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
-  if (fd.get() < 0) return failure("creating temporary file");
-  const char* data = content.data();
-  size_t left = content.size();
-  while (left > 0) {
-    const ssize_t n = ::write(fd.get(), data, left);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      return failure("writing");
-    }
-    data += n;
-    left -= static_cast<size_t>(n);
-  }
-  if (::fsync(fd.get()) != 0) return failure("syncing");
-  if (fd.close() != 0) return failure("closing");
-  if (::rename(tmp.c_str(), path.c_str()) != 0) return failure("renaming into place");
-
-  // Make the rename itself durable. Best effort only: the new file is already in place, and
-  // some file systems refuse to sync a directory.
-  std::string dir = std::filesystem::path(path).parent_path().string();
-  if (dir.empty()) dir = ".";
-  FileDescriptor dir_fd(::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
-  if (dir_fd.get() >= 0) ::fsync(dir_fd.get());
-  return okStatus();
-}
+// Files. (writeFileAtomic is in core/atomic_file.cc.)
 
 Status ensureDirectory(const std::string& dir) {
   if (dir.empty()) return Error{"output directory: the name is empty"};

@@ -1,17 +1,14 @@
 #include "crunch/render/chart.h"
 
+#include "crunch/core/atomic_file.h"
+
 #include <cairo-svg.h>
 #include <cairo.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cassert>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <cstring>
 #include <limits>
 #include <memory>
 #include <utility>
@@ -181,69 +178,19 @@ Error fileError(const std::string& path, const std::string& why) {
   return Error{"cannot write chart '" + path + "': " + why};
 }
 
-// A fresh temporary file beside the target (mkstemp: unique even when several writers aim at
-// the same path), removed on destruction unless committed by renaming it over the target.
-class AtomicFile {
- public:
-  explicit AtomicFile(std::string path) : path_(std::move(path)) {}
-  ~AtomicFile() {
-    if (file_ != nullptr) std::fclose(file_);
-    if (!tmp_.empty() && !committed_) ::unlink(tmp_.c_str());
-  }
-  AtomicFile(const AtomicFile&) = delete;
-  AtomicFile& operator=(const AtomicFile&) = delete;
+// Where Cairo's stream output goes: the chart's AtomicFile. Keeps the first write failure, so
+// the Error gives the system's reason rather than Cairo's generic one.
+struct ChartSink {
+  AtomicFile& file;
+  Status status = okStatus();
 
-  Status open() {
-    std::string tmpl = path_ + ".tmp.XXXXXX";
-    const int fd = ::mkstemp(tmpl.data());
-    if (fd < 0) {
-      return fileError(path_, std::string("cannot create a temporary file beside it: ") +
-                                  std::strerror(errno));
-    }
-    tmp_ = tmpl;
-    ::fchmod(fd, 0644);  // mkstemp makes 0600; a picture is for everyone to read
-    file_ = ::fdopen(fd, "wb");
-    if (file_ == nullptr) {
-      ::close(fd);
-      return fileError(path_, std::string("fdopen failed: ") + std::strerror(errno));
-    }
-    return okStatus();
-  }
-
-  // Cairo's stream callback: appends to the temporary file.
   static cairo_status_t write(void* closure, const unsigned char* data, unsigned int length) {
-    auto* self = static_cast<AtomicFile*>(closure);
-    if (std::fwrite(data, 1, length, self->file_) != length) {
-      self->write_errno_ = errno;
-      return CAIRO_STATUS_WRITE_ERROR;
+    auto* self = static_cast<ChartSink*>(closure);
+    if (self->status) {
+      self->status = self->file.write({reinterpret_cast<const char*>(data), length});
     }
-    return CAIRO_STATUS_SUCCESS;
+    return self->status ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
   }
-
-  // Closes the temporary file and renames it over the target.
-  Status commit() {
-    const bool flushed = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
-    const int flush_errno = errno;
-    const bool closed = std::fclose(file_) == 0;
-    file_ = nullptr;
-    if (!flushed || !closed) {
-      return fileError(path_, std::string("writing failed: ") + std::strerror(flush_errno));
-    }
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      return fileError(path_, "rename from '" + tmp_ + "' failed: " + std::strerror(errno));
-    }
-    committed_ = true;
-    return okStatus();
-  }
-
-  int writeErrno() const { return write_errno_; }
-
- private:
-  std::string path_;
-  std::string tmp_;
-  std::FILE* file_ = nullptr;
-  bool committed_ = false;
-  int write_errno_ = 0;
 };
 
 // ---- Drawing -----------------------------------------------------------------------------------
@@ -527,12 +474,14 @@ Status checkInputs(const Chart& chart, const std::string& path) {
   return okStatus();
 }
 
-Error cairoError(const std::string& path, cairo_status_t st, const AtomicFile& file) {
-  std::string why = cairo_status_to_string(st);
-  if (st == CAIRO_STATUS_WRITE_ERROR && file.writeErrno() != 0) {
-    why += std::string(" (") + std::strerror(file.writeErrno()) + ")";
-  }
-  return fileError(path, why);
+Error cairoError(const std::string& path, cairo_status_t st) {
+  return fileError(path, cairo_status_to_string(st));
+}
+
+// A failure while Cairo wrote into `sink`: the write's own Error when there is one.
+Error cairoError(const std::string& path, cairo_status_t st, const ChartSink& sink) {
+  if (!sink.status) return sink.status.error();
+  return cairoError(path, st);
 }
 
 }  // namespace
@@ -541,51 +490,53 @@ Status renderChartPng(const Chart& chart, const std::string& path) {
   if (Status s = checkInputs(chart, path); !s) return s;
   const ChartOptions& o = chart.options;
   SurfacePtr surface(cairo_image_surface_create(CAIRO_FORMAT_RGB24, o.width_px, o.height_px));
-  AtomicFile file(path);
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st, file);
+    return cairoError(path, st);
   }
   {
     ContextPtr cr(cairo_create(surface.get()));
     drawChart(cr.get(), chart);
     if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
-      return cairoError(path, st, file);
+      return cairoError(path, st);
     }
   }
   cairo_surface_flush(surface.get());
-  if (Status s = file.open(); !s) return s;
+  Result<AtomicFile> file = AtomicFile::create(path, fileError);
+  if (!file) return file.error();
+  ChartSink sink{file.value()};
   if (cairo_status_t st =
-          cairo_surface_write_to_png_stream(surface.get(), &AtomicFile::write, &file);
+          cairo_surface_write_to_png_stream(surface.get(), &ChartSink::write, &sink);
       st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st, file);
+    return cairoError(path, st, sink);
   }
-  return file.commit();
+  return file.value().commit();
 }
 
 Status renderChartSvg(const Chart& chart, const std::string& path) {
   if (Status s = checkInputs(chart, path); !s) return s;
   const ChartOptions& o = chart.options;
   // Declared before the surface, so the surface (which writes into the file) goes first.
-  AtomicFile file(path);
-  if (Status s = file.open(); !s) return s;
+  Result<AtomicFile> file = AtomicFile::create(path, fileError);
+  if (!file) return file.error();
+  ChartSink sink{file.value()};
   SurfacePtr surface(
-      cairo_svg_surface_create_for_stream(&AtomicFile::write, &file, o.width_px, o.height_px));
+      cairo_svg_surface_create_for_stream(&ChartSink::write, &sink, o.width_px, o.height_px));
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st, file);
+    return cairoError(path, st, sink);
   }
   {
     ContextPtr cr(cairo_create(surface.get()));
     drawChart(cr.get(), chart);
     if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
-      return cairoError(path, st, file);
+      return cairoError(path, st, sink);
     }
   }
   cairo_surface_finish(surface.get());  // writes the rest of the document
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st, file);
+    return cairoError(path, st, sink);
   }
   surface.reset();
-  return file.commit();
+  return file.value().commit();
 }
 
 }  // namespace crunch

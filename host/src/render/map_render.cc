@@ -1,13 +1,12 @@
 #include "crunch/render/map_render.h"
 
+#include "crunch/core/atomic_file.h"
+
 #include <cairo-svg.h>
 #include <cairo.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
 #include <memory>
 #include <set>
 #include <utility>
@@ -55,34 +54,10 @@ Error pictureError(const std::string& path, const std::string& why) {
   return Error{"cannot write map picture '" + path + "': " + why};
 }
 
-// The temporary file a picture is drawn into; removed on destruction unless committed, so no
-// failure path can leave a half-written picture behind.
-class TempFile {
- public:
-  explicit TempFile(std::string final_path) : path_(std::move(final_path)), tmp_(path_ + ".tmp") {}
-  ~TempFile() {
-    if (!committed_) std::remove(tmp_.c_str());
-  }
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-
-  const std::string& tmp() const { return tmp_; }
-
-  // Moves the finished temporary over the final path.
-  Status commit() {
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      return pictureError(
-          path_, std::string("rename from '") + tmp_ + "' failed: " + std::strerror(errno));
-    }
-    committed_ = true;
-    return okStatus();
-  }
-
- private:
-  std::string path_;
-  std::string tmp_;
-  bool committed_ = false;
-};
+// A file-system failure of the picture's AtomicFile, in the picture's own wording.
+Error pictureFileError(const std::string& path, const std::string& why) {
+  return pictureError(path, "error while writing: " + why);
+}
 
 Status checkInputs(const Scene& truth, const std::string& path, const RenderOptions& options) {
   if (path.empty()) return Error{"cannot write map picture: the output path is empty"};
@@ -517,7 +492,6 @@ Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
                     const RenderOptions& options) {
   if (Status s = checkInputs(truth, path, options); !s) return s;
   const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
-  TempFile file(path);
 
   SurfacePtr surface = makeImageSurface(canvas.widthPx(), canvas.heightPx());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
@@ -531,11 +505,14 @@ Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
     }
   }
   cairo_surface_flush(surface.get());
-  if (cairo_status_t st = cairo_surface_write_to_png(surface.get(), file.tmp().c_str());
+  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
+  if (!file) return file.error();
+  if (cairo_status_t st =
+          cairo_surface_write_to_png(surface.get(), file.value().tempPath().c_str());
       st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
-  return file.commit();
+  return file.value().commit();
 }
 
 Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
@@ -544,9 +521,10 @@ Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
   const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
   // Declared before the surface so the surface (which holds the open temp file) is destroyed,
   // closing the file, before the temp is removed on a failure path.
-  TempFile file(path);
+  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
+  if (!file) return file.error();
 
-  SurfacePtr surface = makeSvgSurface(file.tmp(), canvas.widthPx(), canvas.heightPx());
+  SurfacePtr surface = makeSvgSurface(file.value().tempPath(), canvas.widthPx(), canvas.heightPx());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
@@ -561,7 +539,7 @@ Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
-  return file.commit();
+  return file.value().commit();
 }
 
 }  // namespace crunch

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "crunch/core/atomic_file.h"  // writeFileAtomic
 #include "crunch/core/result.h"
 #include "crunch/mapping/map.h"
 
@@ -25,11 +26,8 @@ std::string mapToJson(const Map& map);
 // ignored (the contract allows extra keys). The result has no shapelets.
 Result<Map> parseMapJson(const std::string& text, const std::string& source);
 
-// Writes `content` to `path` atomically: into `path + ".tmp.<pid>"`, fsync, then rename over
-// `path`. On failure the temporary file is removed, `path` is untouched (old content or absent),
-// and the Error names the path and the system's reason. Two threads of one process must not
-// write the same path at once (they would share the temporary name).
-Status writeFileAtomic(const std::string& path, const std::string& content);
+// writeFileAtomic(path, contents), which every writer of an output file uses, is declared in
+// crunch/core/atomic_file.h (included above).
 
 // Creates `dir` and any missing parents; succeeds if it already is a directory. The Error names
 // the directory.

@@ -8,9 +8,9 @@
 // phi, on top so the evidence stays visible). A title line above and a legend in the top-right
 // corner, beside the arena.
 //
-// Files are written atomically: the picture goes to `path + ".tmp"` and is renamed over `path`
-// only when complete, so a failed render never leaves a partial file and never touches an
-// existing one. Functions are thread-safe for distinct paths.
+// Files are written atomically (crunch/core/atomic_file.h): the picture goes to a fresh
+// temporary file beside `path` and is renamed over `path` only when complete, so a failed render
+// never leaves a partial file and never touches an existing one. Functions are thread-safe.
 #pragma once
 
 #include <string>
