@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "sim_mode.h"
+#include "train_mode.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"crunchhost: map table-like objects by touch with a whiskered robot"};
@@ -50,7 +51,30 @@ int main(int argc, char** argv) {
   app.add_option("--global-chains", opt.mapping.global_chains,
                  "independent chains of the global inference; a table needs half to agree")
       ->capture_default_str();
+  // `crunchhost train`: the paper's training protocols in the simulator (docs/TRAINING.md).
+  crunch::app::TrainOptions train_opt;
+  auto* train = app.add_subcommand(
+      "train", "collect the paper's training contacts in the simulator, fit and evaluate the "
+               "signal models, write them and the paper's figures (docs/TRAINING.md)");
+  train->add_option("--out", train_opt.out_dir, "output directory")->capture_default_str();
+  train->add_option("--seed", train_opt.seed, "seed of every jitter and sensor noise")
+      ->capture_default_str();
+  train->add_option("--models-out", train_opt.models_out,
+                    "also write the models here (e.g. models/sim_models.json)");
+  train->add_option("--radial-f1", train_opt.radial_f1,
+                    "f1 of the saved radial lines: max (over the whisk, as the mapper takes "
+                    "it) | first (the first pass)")
+      ->check(CLI::IsMember({"max", "first"}))
+      ->capture_default_str();
+  train->add_flag("--json", train_opt.json_progress, "machine-readable progress on stdout");
   CLI11_PARSE(app, argc, argv);
+  if (*train) {
+    if (sim || robot) {
+      std::cerr << "crunchhost: train is a mode of its own: drop --sim/--robot\n";
+      return 2;
+    }
+    return crunch::app::runTrain(train_opt, std::cout, std::cerr);
+  }
 
   if (robot) {
     std::cerr << "crunchhost: --robot: the USB whisker bridge and Create drivers are not built yet "
