@@ -28,7 +28,7 @@ struct TrainOptions {
   std::string out_dir = "out/train";
   std::uint64_t seed = 1;
   std::string models_out;         // empty: only DIR/models.json
-  std::string radial_f1 = "max";  // which f1 the saved radial lines use: max | first
+  std::string radial_f1 = "first";  // which f1 the saved radial lines use: first | max
   bool json_progress = false;
   // The protocol; its seed and progress are set from the fields above. Tests shrink it.
   sim::TrainingOptions protocol;

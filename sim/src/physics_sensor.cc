@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "crunch/behaviour/body_whisk.h"
+#include "crunch_sim/training.h"
 
 namespace crunch::sim {
 
@@ -21,6 +22,7 @@ double halfTurn(double a) {
 
 constexpr int kFreeEvery = 120;  // samples between negative-evidence rays: ~0.45 deg of whisk
 constexpr int kFreeGuard = 4;    // records either side (+-0.24 s) that must show no contact
+constexpr int kMaxRestSteps = 2000;  // 1 s: a released detector needs 20 ms below threshold
 
 bool clearOfEverything(const World& world, const std::vector<WhiskerMount>& mounts,
                        const Pose2& pose, double z) {
@@ -41,10 +43,7 @@ bool clearOfEverything(const World& world, const std::vector<WhiskerMount>& moun
 
 PhysicsSensorModel::Options physicsSensorOptions(std::uint64_t seed) {
   PhysicsSensorModel::Options o;
-  // A free whisker lags up to ~0.0045 rad when the whisk starts turning (its own inertia);
-  // contacts give 0.012-0.25 rad. Onset above 0.008 rad keeps the turn itself from counting.
-  o.rig.pipeline.detector.min_onset_threshold = 0.008;
-  o.rig.seed = seed;
+  o.rig = physicsRigOptions(seed);  // exactly what the models were trained with
   return o;
 }
 
@@ -82,8 +81,10 @@ Result<std::unique_ptr<PhysicsSensorModel>> PhysicsSensorModel::create(
   auto rig = WhiskerRig::create(world, mounts, *start, options.rig);
   if (!rig) return rig.error();
   if (auto s = rig.value()->pipeline().setModels(models); !s) return s.error();
-  return std::unique_ptr<PhysicsSensorModel>(
+  auto model = std::unique_ptr<PhysicsSensorModel>(
       new PhysicsSensorModel(std::move(rig).value(), std::move(mounts), options));
+  model->clear_pose_ = *start;
+  return model;
 }
 
 PhysicsSensorModel::PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig,
@@ -98,7 +99,7 @@ void PhysicsSensorModel::takeEpisode(const signal::ContactEpisode& ep) {
     const signal::WhiskerContact& c = ep.whiskers[w];
     if (!c.touched) continue;
     Best& b = best_[w];
-    if (b.have && c.f1 <= b.f1) continue;
+    if (b.have) continue;  // the first pass (docs/TRAINING.md: the models' f1)
     b = Best{};
     b.have = true;
     b.f1 = c.f1;
@@ -131,6 +132,14 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
 
   WhiskeredRobot& robot = rig_->robot();
   const double t0 = robot.now();
+  // A whisk that ended pressed against something leaves a detector in contact, and it cannot
+  // open the next pose's episode until it releases: rest clear of everything first (bounded).
+  if (rig_->contactMask() != 0 || rig_->pipeline().inEpisode()) {
+    robot.place(clear_pose_);
+    for (int i = 0; i < kMaxRestSteps && (rig_->contactMask() != 0); ++i) rig_->step();
+    if (rig_->pipeline().inEpisode()) (void)rig_->finish();
+    rig_->resetTruth();
+  }
   robot.place(pose);
   BodyWhisk::Options wopt;
   wopt.whisker_bearings.clear();

@@ -6,14 +6,20 @@
 // pipeline (WhiskerRig). Its noise is what those classifiers make; nothing is added.
 //
 // Reports. One whisk may give several contact episodes (the whisker meets the object on the
-// toward and on the return pass); each whisker reports at most once per whisk, from the episode
-// in which its peak deflection f1 was largest (the paper's peak over the whisk, eq. 1):
+// toward and on the return pass); each whisker reports at most once per whisk, from the first
+// episode in which it touched: its f1 is the peak of that first pass (eq. 1), as the shipped
+// models were trained (`crunchhost train --radial-f1 first`; docs/TRAINING.md: the return pass
+// can meet a thin object's far side and peak higher, which made the radial error 5.5 mm
+// instead of 1.9 mm):
 //   r     the radial model's estimate (eq. 2), clamped to [0, external length];
 //   phi   the orientation template's angle (eq. 3), which is relative to the heading at the
 //         episode's first contact, turned into the frame of the robot at this whisker's peak;
 //   robot the odometry pose at the peak sample (exact in the simulator, §2.8).
 // A whisker without a radial estimate, or an episode without an orientation (window cut short),
 // gives no report; both are counted.
+//
+// Between poses: a whisk that ended with a whisker still in contact is followed by a rest at the
+// clear start pose until the detectors release (at most 1 s), so the next pose starts free.
 //
 // Negative evidence: every ~0.5 degrees of the whisk, a whisker whose detector saw no contact
 // within +-0.1 s (the smoothing lags the physics by ~14 ms) contributes its straight rest ray.
@@ -105,6 +111,7 @@ class PhysicsSensorModel final : public SensorModel {
   std::vector<Sample> samples_;
   std::vector<FreeRay> free_;
   ReportErrors errors_;
+  Pose2 clear_pose_;  // where the rig calibrated: every whisker free
 };
 
 // The options the shipped models were trained with (docs/TRAINING.md), with the Hall noise
