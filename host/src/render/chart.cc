@@ -1,6 +1,7 @@
 #include "crunch/render/chart.h"
 
 #include "crunch/core/atomic_file.h"
+#include "cairo_handles.h"
 
 #include <cairo-svg.h>
 #include <cairo.h>
@@ -161,16 +162,8 @@ Vec2 ChartLayout::toPixel(double x, double y) const {
 
 namespace {
 
-// ---- Cairo handles (STYLE.md item 4) ----------------------------------------------------------
-
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* cr) const { cairo_destroy(cr); }
-};
-using SurfacePtr = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
-using ContextPtr = std::unique_ptr<cairo_t, ContextDeleter>;
+using render_detail::ContextPtr;
+using render_detail::SurfacePtr;
 
 // ---- Atomic output -----------------------------------------------------------------------------
 

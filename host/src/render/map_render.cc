@@ -1,6 +1,7 @@
 #include "crunch/render/map_render.h"
 
 #include "crunch/core/atomic_file.h"
+#include "cairo_handles.h"
 
 #include <cairo-svg.h>
 #include <cairo.h>
@@ -25,16 +26,8 @@ Vec2 MapCanvas::toPixel(const Vec2& metres) const {
 
 namespace {
 
-// ---- Cairo handles (STYLE.md item 4) ----------------------------------------------------------
-
-struct SurfaceDeleter {
-  void operator()(cairo_surface_t* s) const { cairo_surface_destroy(s); }
-};
-struct ContextDeleter {
-  void operator()(cairo_t* cr) const { cairo_destroy(cr); }
-};
-using SurfacePtr = std::unique_ptr<cairo_surface_t, SurfaceDeleter>;
-using ContextPtr = std::unique_ptr<cairo_t, ContextDeleter>;
+using render_detail::ContextPtr;
+using render_detail::SurfacePtr;
 
 // Cairo never returns null: a failed creation gives an "error object" whose status says why.
 SurfacePtr makeImageSurface(int width, int height) {
