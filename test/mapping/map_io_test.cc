@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include "support/temp_dir.h"
 
 namespace fs = std::filesystem;
 using crunch::kPi;
@@ -15,28 +16,6 @@ using crunch::MapTable;
 using crunch::Vec2;
 
 namespace {
-
-// A fresh, empty directory under the system's temporary directory, removed at scope exit.
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = fs::temp_directory_path() /
-            ("crunch_map_io_test." + std::to_string(::getpid()) + "." + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::string readFile(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "crunch/core/rng.h"
+#include "support/temp_dir.h"
 
 using namespace crunch;
 namespace fs = std::filesystem;
@@ -106,25 +107,6 @@ Map makeMap(const Scene& scene) {
   return map;
 }
 
-// A fresh directory removed with everything in it at the end of the test.
-class TempDir {
- public:
-  TempDir()
-      : path_(fs::temp_directory_path() / ("crunch_render_test_" + std::to_string(::getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
 
 std::string readFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

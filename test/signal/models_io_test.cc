@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "crunch/core/rng.h"
+#include "support/temp_dir.h"
 
 using namespace crunch;
 using namespace crunch::signal;
@@ -46,23 +47,6 @@ SignalModels sampleModels() {
   return m;
 }
 
-// A scratch directory, removed at the end of the test.
-struct TempDir {
-  TempDir() {
-    path = std::filesystem::temp_directory_path() /
-           ("crunch_signal_models_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() { std::filesystem::remove_all(path); }
-  std::string file(const std::string& name) const { return (path / name).string(); }
-  size_t entries() const {
-    return static_cast<size_t>(std::distance(std::filesystem::directory_iterator(path),
-                                             std::filesystem::directory_iterator()));
-  }
-  std::filesystem::path path;
-  static inline int counter = 0;
-};
 
 // The error message for a document made by editing the valid one.
 std::string errorFor(const std::function<void(Json&)>& edit) {
@@ -79,7 +63,7 @@ TEST_CASE("Models file: round trip is bit-exact", "[signal]") {
   const SignalModels m = sampleModels();
   const std::string path = dir.file("signal_models.json");
   REQUIRE(saveModels(m, path).ok());
-  CHECK(dir.entries() == 1);  // no temporary left behind
+  CHECK(dir.entries().size() == 1);  // no temporary left behind
   const Result<SignalModels> back = loadModels(path);
   REQUIRE(back.ok());
   const SignalModels& b = back.value();
@@ -115,7 +99,7 @@ TEST_CASE("Models file: a missing, unreadable or malformed file names the file",
   Result<SignalModels> r = loadModels(missing);
   REQUIRE_FALSE(r.ok());
   CHECK_THAT(r.error().message, Catch::StartsWith(missing) && Catch::Contains("No such file"));
-  r = loadModels(dir.path.string());
+  r = loadModels(dir.path().string());
   REQUIRE_FALSE(r.ok());
   CHECK_THAT(r.error().message, Catch::Contains("is a directory"));
 
@@ -230,11 +214,11 @@ TEST_CASE("Models file: saving invalid models fails and keeps the old file", "[s
   std::stringstream after;
   after << again.rdbuf();
   CHECK(after.str() == before.str());
-  CHECK(dir.entries() == 1);
+  CHECK(dir.entries().size() == 1);
   // A directory that does not exist: an error naming the path, nothing written.
   const std::string nowhere = dir.file("no/such/dir/m.json");
   s = saveModels(sampleModels(), nowhere);
   REQUIRE_FALSE(s.ok());
   CHECK_THAT(s.error().message, Catch::StartsWith(nowhere));
-  CHECK(dir.entries() == 1);
+  CHECK(dir.entries().size() == 1);
 }
