@@ -487,7 +487,7 @@ Result<std::unique_ptr<UsbBridge>> UsbBridge::open(const Options& options, Chunk
   if (Status s = im.openDevice(); !s) return s.error();
   bridge->connected_.store(true);
 
-  if (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
+  if (options.use_hotplug && libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
     const int r = libusb_hotplug_register_callback(
         im.ctx.get(), LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, LIBUSB_HOTPLUG_NO_FLAGS,
         options.id.vid, options.id.pid, LIBUSB_HOTPLUG_MATCH_ANY, &Impl::onHotplug, &im,
@@ -497,6 +497,8 @@ Result<std::unique_ptr<UsbBridge>> UsbBridge::open(const Options& options, Chunk
   im.thread = std::thread([&im] { im.run(); });
   return bridge;
 }
+
+bool UsbBridge::hotplugSupported() { return libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG) != 0; }
 
 void UsbBridge::stop() {
   std::lock_guard<std::mutex> lock(impl_->stop_mu);

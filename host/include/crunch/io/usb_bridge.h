@@ -67,6 +67,8 @@ class UsbBridge {
     double reconnect_poll_s = 0.25;  // while disconnected, look for the device this often, > 0
     unsigned timeout_ms = 0;  // per-transfer timeout; 0 = none. A timed-out transfer (no data
                               // in that time) is resubmitted and counts no error.
+    bool use_hotplug = true;  // also listen for libusb hotplug arrivals (when supported); the
+                              // poll runs either way. false tests the poll alone.
   };
 
   // One completed transfer's bytes (actual_length > 0), valid during the call only, and the
@@ -85,6 +87,9 @@ class UsbBridge {
   // kDisconnected); `on_state` may be empty.
   static Result<std::unique_ptr<UsbBridge>> open(const Options& options, ChunkHandler on_chunk,
                                                  StateHandler on_state);
+
+  // Whether this libusb can report device arrivals (LIBUSB_CAP_HAS_HOTPLUG).
+  static bool hotplugSupported();
 
   ~UsbBridge();  // stop()
   UsbBridge(const UsbBridge&) = delete;
