@@ -46,14 +46,14 @@ Result<std::unique_ptr<CreateBase>> CreateBase::open(const std::string& device,
   if (!port) return port.error();
   std::unique_ptr<CreateBase> base(new CreateBase(std::move(port).value(), options));
 
+  // Named arrays: spans over temporaries in a range-for initializer would dangle.
+  const auto start = oi::start();
+  const auto mode = options.full_mode ? oi::full() : oi::safe();
   const auto ids = oi::stream(oi::kCreateBaseStream);
-  for (const std::span<const std::uint8_t> cmd :
-       {std::span<const std::uint8_t>(oi::start()),
-        std::span<const std::uint8_t>(options.full_mode ? oi::full() : oi::safe()), ids.span()}) {
-    // Each temporary array lives to the end of the full expression: copy before sending.
-    std::array<std::uint8_t, 2 + oi::kMaxIds> copy{};
-    std::copy(cmd.begin(), cmd.end(), copy.begin());
-    if (Status s = base->send({copy.data(), cmd.size()}); !s) {
+  for (const std::span<const std::uint8_t> cmd : {std::span<const std::uint8_t>(start),
+                                                  std::span<const std::uint8_t>(mode),
+                                                  ids.span()}) {
+    if (Status s = base->send(cmd); !s) {
       return Error{"Create on " + device + ": could not send the start-up commands: " +
                    s.error().message};
     }
