@@ -12,16 +12,6 @@ namespace crunch::sim {
 
 namespace {
 
-// An orientation modulo pi, as a value in [0, pi) (ContactReport::phi's convention).
-double halfTurn(double a) {
-  double w = wrapPeriod(a, kPi);
-  if (w < 0.0) w += kPi;
-  if (w >= kPi) w -= kPi;
-  return w;
-}
-
-constexpr int kFreeEvery = 120;  // samples between negative-evidence rays: ~0.45 deg of whisk
-constexpr int kFreeGuard = 4;    // records either side (+-0.24 s) that must show no contact
 constexpr int kMaxRestSteps = 2000;  // 1 s: a released detector needs 20 ms below threshold
 
 bool clearOfEverything(const World& world, const std::vector<WhiskerMount>& mounts,
@@ -89,44 +79,35 @@ Result<std::unique_ptr<PhysicsSensorModel>> PhysicsSensorModel::create(
 
 PhysicsSensorModel::PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig,
                                        std::vector<WhiskerMount> mounts, const Options& options)
-    : rig_(std::move(rig)), mounts_(std::move(mounts)), options_(options), best_(mounts_.size()) {}
+    : rig_(std::move(rig)),
+      mounts_(std::move(mounts)),
+      options_(options),
+      evidence_(mounts_),
+      scores_(mounts_.size()) {}
 
 void PhysicsSensorModel::takeEpisode(const signal::ContactEpisode& ep) {
   ++errors_.episodes;
+  const std::uint32_t set =
+      evidence_.take(ep, [this](std::uint64_t i) { return rig_->poseAtSample(i); });
   const auto& truth = rig_->episodeTruth();
-  const Pose2 onset_pose = rig_->poseAtSample(ep.start_sample);
   for (std::size_t w = 0; w < mounts_.size(); ++w) {
-    const signal::WhiskerContact& c = ep.whiskers[w];
-    if (!c.touched) continue;
-    Best& b = best_[w];
-    if (b.have) continue;  // the first pass (docs/TRAINING.md: the models' f1)
-    b = Best{};
-    b.have = true;
-    b.f1 = c.f1;
-    const Pose2 peak_pose =
-        rig_->poseAtSample(ep.start_sample + static_cast<std::uint64_t>(std::max<std::int64_t>(
-                                                 c.peak_sample, 0)));
-    b.report.whisker = static_cast<int>(w);
-    b.report.robot = peak_pose;
-    b.has_r = c.has_r;
-    b.report.r = std::clamp(c.r, 0.0, mounts_[w].length);
-    b.has_phi = ep.has_orientation;
-    // The template's angle is relative to the heading at the first contact (the window's
-    // alignment, §2.5); the report is relative to the heading at this whisker's peak.
-    b.report.phi = halfTurn(ep.orientation.angle + onset_pose.theta - peak_pose.theta);
+    if (!(set & (1u << w))) continue;
+    const ContactReport& rep = evidence_.entry(static_cast<int>(w)).report;
     const WhiskerTruth& t = truth[w];
-    b.scored = t.touched;
+    Score& sc = scores_[w];
+    sc = Score{};
+    sc.scored = t.touched;
     if (t.touched) {
-      b.err_r = b.report.r - t.r_at_peak;
-      b.err_phi = wrapPeriod(b.report.phi - (t.surface_tangent - t.pose_at_peak.theta), kPi);
+      sc.err_r = rep.r - t.r_at_peak;
+      sc.err_phi = wrapPeriod(rep.phi - (t.surface_tangent - t.pose_at_peak.theta), kPi);
     }
   }
 }
 
 void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
                                std::vector<ContactReport>& out) {
-  for (Best& b : best_) b = Best{};
-  samples_.clear();
+  evidence_.begin();
+  for (Score& sc : scores_) sc = Score{};
   free_.clear();
   ++errors_.whisks;
 
@@ -153,15 +134,22 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
       options_.rig.robot.dt);
   long n = 0;
   bool whisking = true;
+  Pose2 free_pose = robot.odometry();  // the negative-evidence sample being accumulated
+  std::uint32_t free_mask = 0;
   double settle_until = 0.0;
   for (; n < max_steps; ++n) {
     if (const signal::ContactEpisode* ep = rig_->step()) takeEpisode(*ep);
     const std::uint32_t mask = rig_->contactMask();
     if (whisking) {
       (void)whisk.update(mask);
-      if (n % kFreeEvery == 0) samples_.push_back({robot.odometry(), 0});
-      if (!samples_.empty()) samples_.back().mask |= mask;
+      if (n % WhiskEvidence::kFreeEvery == 0) {
+        if (n > 0) evidence_.sample(free_pose, free_mask);
+        free_pose = robot.odometry();
+        free_mask = 0;
+      }
+      free_mask |= mask;
       if (whisk.done()) {
+        evidence_.sample(free_pose, free_mask);
         whisking = false;
         settle_until = robot.now() + options_.max_settle_s;
       }
@@ -176,42 +164,20 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   rig_->resetTruth();
   errors_.simulated_s += robot.now() - t0;
 
-  for (const Best& b : best_) {
-    if (!b.have) continue;
-    if (!b.has_r) {
-      ++errors_.no_radial;
-      continue;
-    }
-    if (!b.has_phi) {
-      ++errors_.no_orientation;
-      continue;
-    }
-    out.push_back(b.report);
-    if (b.scored) {
+  const std::size_t first = out.size();
+  evidence_.end(out, free_);
+  errors_.no_radial = evidence_.counts().no_radial;
+  errors_.no_orientation = evidence_.counts().no_orientation;
+  for (std::size_t k = first; k < out.size(); ++k) {
+    const Score& sc = scores_[static_cast<std::size_t>(out[k].whisker)];
+    if (sc.scored) {
       ++errors_.reports;
-      errors_.sum_r += b.err_r;
-      errors_.sum_r2 += b.err_r * b.err_r;
-      errors_.sum_phi += b.err_phi;
-      errors_.sum_phi2 += b.err_phi * b.err_phi;
+      errors_.sum_r += sc.err_r;
+      errors_.sum_r2 += sc.err_r * sc.err_r;
+      errors_.sum_phi += sc.err_phi;
+      errors_.sum_phi2 += sc.err_phi * sc.err_phi;
     } else {
       ++errors_.unscored;
-    }
-  }
-
-  // Negative evidence: whisk samples far (in time) from any detected contact of the whisker.
-  const int ns = static_cast<int>(samples_.size());
-  for (int i = 0; i < ns; ++i) {
-    const Pose2& p = samples_[static_cast<std::size_t>(i)].pose;
-    for (std::size_t w = 0; w < mounts_.size(); ++w) {
-      bool clear = true;
-      for (int j = std::max(0, i - kFreeGuard); j <= std::min(ns - 1, i + kFreeGuard); ++j) {
-        if (samples_[static_cast<std::size_t>(j)].mask & (1u << w)) clear = false;
-      }
-      if (!clear) continue;
-      const WhiskerMount& m = mounts_[w];
-      const Vec2 base = p.toWorld(m.base);
-      const double dir = p.theta + m.bearing;
-      free_.push_back({base, base + m.length * Vec2{std::cos(dir), std::sin(dir)}});
     }
   }
 }

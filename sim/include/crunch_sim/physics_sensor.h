@@ -5,7 +5,8 @@
 // Hall model, the firmware on virtual whisker boards, the bridge decoder and the signal
 // pipeline (WhiskerRig). Its noise is what those classifiers make; nothing is added.
 //
-// Reports. One whisk may give several contact episodes (the whisker meets the object on the
+// Reports and negative evidence come from WhiskEvidence (mapping/whisk_evidence.h), which
+// `crunchhost --robot` uses too. One whisk may give several contact episodes (the whisker meets the object on the
 // toward and on the return pass); each whisker reports at most once per whisk, from the first
 // episode in which it touched: its f1 is the peak of that first pass (eq. 1), as the shipped
 // models were trained (`crunchhost train --radial-f1 first`; docs/TRAINING.md: the return pass
@@ -36,6 +37,7 @@
 #include <vector>
 
 #include "crunch/mapping/sensor_model.h"
+#include "crunch/mapping/whisk_evidence.h"
 #include "crunch/signal/models_io.h"
 #include "crunch_sim/whisker_rig.h"
 #include "crunch_sim/world.h"
@@ -91,24 +93,17 @@ class PhysicsSensorModel final : public SensorModel {
                      const Options& options);
   void takeEpisode(const signal::ContactEpisode& episode);
 
-  struct Best {
-    bool have = false;
-    double f1 = 0.0;
-    ContactReport report;
+  // A report's error against the truth, taken when the episode that set it ended.
+  struct Score {
     bool scored = false;
     double err_r = 0.0, err_phi = 0.0;
-    bool has_r = false, has_phi = false;
-  };
-  struct Sample {
-    Pose2 pose;
-    std::uint32_t mask = 0;
   };
 
   std::unique_ptr<WhiskerRig> rig_;
   std::vector<WhiskerMount> mounts_;
   Options options_;
-  std::vector<Best> best_;
-  std::vector<Sample> samples_;
+  WhiskEvidence evidence_;      // the reports and free rays of the current whisk
+  std::vector<Score> scores_;   // per whisker
   std::vector<FreeRay> free_;
   ReportErrors errors_;
   Pose2 clear_pose_;  // where the rig calibrated: every whisker free

@@ -26,6 +26,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -94,6 +95,9 @@ class WhiskerRig {
   signal::SignalPipeline& pipeline() { return pipeline_; }
   const signal::SignalPipeline& pipeline() const { return pipeline_; }
   const io::BridgeStreamCounters& decoderCounters() const { return decoder_.counters(); }
+  // The bridge bytes of the last step(): every board's frame of that tick, as the FPGA bridge
+  // forwards them to USB (the virtual robot serves these over a umockdev USB device).
+  std::span<const std::uint8_t> lastTickBytes() const { return stream_; }
   VirtualWhiskerBoard& board(int w) { return *boards_[static_cast<std::size_t>(w)]; }
   // Ticks at which some board's frame did not arrive (fed to the pipeline as kDropped).
   std::uint64_t missingFrames() const { return missing_frames_; }

@@ -40,6 +40,13 @@ inline double wrapPi(double a) {
   return a - kPi;
 }
 
+// The pose `local`, given in the frame of `frame`, in the frame `frame` is given in (frame o
+// local): e.g. the map pose of odometry `local` for a robot that started at `frame`.
+inline Pose2 compose(const Pose2& frame, const Pose2& local) {
+  const Vec2 p = frame.toWorld(local.position());
+  return {p.x(), p.y(), wrapPi(frame.theta + local.theta)};
+}
+
 // Wraps an angle into [-period/2, period/2): the signed difference of two angles that are
 // meaningful modulo `period` (pi for a line or a symmetric table, pi/2 for a square leg).
 inline double wrapPeriod(double a, double period) {

@@ -1,0 +1,72 @@
+// The mapping run of paper §2.8 one pose at a time, for a robot that decides where to go as it
+// goes (`crunchhost --robot`, `--replay`) as well as for the pre-determined pose grid
+// (runMapping, pipeline.h): each pose's contact reports become shapelets (eqs. 4-6) in the
+// blackboard's working memory, the blackboard is annealed (Algorithm 1) and MAP_t (eq. 27) is
+// recorded; at the end the collation is fused into one map (fused_map.h), by one global
+// inference over every shapelet when MappingOptions::global_sweeps > 0.
+//
+// Randomness: the sampler draws from its own stream seeded by options.seed, so the map depends
+// only on the reports, their order and the seed. snapshot() draws nothing (it clusters the
+// per-pose MAPs), so a run that writes maps as it goes ends with the same map as one that
+// does not.
+//
+// Ownership: owns the blackboard, sampler and free-space grid. Not copyable or movable (the
+// sampler references the blackboard). Thread-safety: none.
+#pragma once
+
+#include <chrono>
+#include <span>
+#include <vector>
+
+#include "crunch/blackboard/blackboard.h"
+#include "crunch/blackboard/sampler.h"
+#include "crunch/core/rng.h"
+#include "crunch/mapping/free_space.h"
+#include "crunch/mapping/map.h"
+#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/shapelet.h"
+
+namespace crunch {
+
+class Mapper {
+ public:
+  // `lo`, `hi`: the region the robot and its whiskers can reach (the negative-evidence grid's
+  // extent; rays outside it are not counted).
+  Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,
+         const MappingOptions& options);
+  Mapper(const Mapper&) = delete;
+  Mapper& operator=(const Mapper&) = delete;
+
+  // One pose (one body whisk): its reports and the rays its whiskers swept without touching.
+  // Reports that toShapelet() rejects are counted in stats().rejected_reports. If at least one
+  // shapelet is new, anneals and appends MAP_t to per_pose with `pose`. Returns the shapelets
+  // added.
+  int addPose(const Pose2& pose, std::span<const ContactReport> reports,
+              std::span<const FreeRay> free_rays);
+
+  // The map so far: per-pose MAPs, shapelets, and tables fused by clustering (no random draws).
+  Map snapshot() const;
+  // The final map: the global inference (options.global_sweeps > 0) or the clustering; stats
+  // include wall_s since construction. Call once, last.
+  Map finish();
+
+  int poses() const { return pose_count_; }
+  const std::vector<WhiskerMount>& mounts() const { return mounts_; }
+
+ private:
+  std::vector<WhiskerMount> mounts_;
+  MappingOptions options_;
+  std::chrono::steady_clock::time_point start_;
+  Rng rng_;
+  Blackboard board_;
+  Sampler sampler_;
+  FreeSpaceGrid free_space_;
+  Map map_;
+  int pose_count_ = 0;
+  std::vector<Pose2> tables_;  // scratch for MAP_t
+};
+
+// A table of the model's one size at `pose`.
+MapTable modelTable(const Pose2& pose, const ModelParams& model);
+
+}  // namespace crunch
