@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "robot_mode.h"
 #include "sim_mode.h"
 #include "train_mode.h"
 
@@ -14,6 +15,38 @@ int main(int argc, char** argv) {
   auto* mode_sim = app.add_flag("--sim", sim, "run the ODE simulator and map its world");
   auto* mode_robot = app.add_flag("--robot", robot, "run the real robot (USB whisker bridge + Create)");
   mode_sim->excludes(mode_robot);
+  std::string replay;
+  auto* mode_replay = app.add_option("--replay", replay,
+                                     "re-run a recording of --robot offline (same map)")
+                          ->check(CLI::ExistingFile);
+  mode_replay->excludes(mode_sim)->excludes(mode_robot);
+  // --robot (robot_mode.h, docs/ROBOT.md)
+  crunch::app::RobotOptions ropt;
+  auto* robot_opts = app.add_option_group("robot", "options of --robot");
+  robot_opts->add_option("--usb", ropt.usb, "USB id VID:PID of the whisker bridge")
+      ->capture_default_str();
+  robot_opts->add_option("--create", ropt.create, "serial port of the iRobot Create")
+      ->capture_default_str();
+  robot_opts->add_option("--duration", ropt.duration_s, "seconds to run (0: until Ctrl-C)")
+      ->capture_default_str();
+  robot_opts->add_option("--record", ropt.record_path,
+                         "recording file (default OUT/recording.crec)");
+  robot_opts->add_flag("!--no-record", ropt.record, "do not record the raw input");
+  robot_opts->add_option("--map-every", ropt.map_every_s, "seconds between map writes")
+      ->capture_default_str();
+  robot_opts->add_option("--area-width", ropt.area_width, "width of the mapped area, m")
+      ->capture_default_str();
+  robot_opts->add_option("--area-depth", ropt.area_depth, "depth of the mapped area, m")
+      ->capture_default_str();
+  robot_opts->add_option("--start-x", ropt.start_x, "start x in the map, m (default: centre)");
+  robot_opts->add_option("--start-y", ropt.start_y, "start y in the map, m (default: centre)");
+  robot_opts->add_option("--start-theta", ropt.start_theta, "start heading in the map, rad")
+      ->capture_default_str();
+  robot_opts->add_flag("--full-mode", ropt.create_full_mode,
+                       "OI Full mode (no cliff/wheel-drop stop by the Create itself)");
+  robot_opts->add_flag("!--checksum-per-manual", ropt.checksum_includes_header,
+                       "the Create's checksum excludes the header byte, as its manual says "
+                       "(default: includes it, as the Create 1 does)");
   app.add_option("--scene", scene, "scene file (JSON, ARCHITECTURE.md §4); default: built-in arena")
       ->check(CLI::ExistingFile);
   app.add_option("--sensor-model", opt.sensor_model, "physics | gaussian | ideal")
@@ -76,13 +109,23 @@ int main(int argc, char** argv) {
     return crunch::app::runTrain(train_opt, std::cout, std::cerr);
   }
 
+  if (!replay.empty()) {
+    crunch::app::ReplayOptions rp;
+    rp.recording = replay;
+    rp.out_dir = opt.out_dir;
+    rp.json_progress = opt.json_progress;
+    return crunch::app::runReplay(rp, std::cout, std::cerr);
+  }
   if (robot) {
-    std::cerr << "crunchhost: --robot: the USB whisker bridge and Create drivers are not built yet "
-                 "(issue 5); nothing was opened\n";
-    return 2;
+    ropt.out_dir = opt.out_dir;
+    ropt.seed = opt.seed;
+    ropt.models_path = opt.models_path;
+    ropt.json_progress = opt.json_progress;
+    ropt.mapping = opt.mapping;
+    return crunch::app::runRobot(ropt, std::cout, std::cerr);
   }
   if (!sim) {
-    std::cerr << "crunchhost: choose a mode: --sim or --robot (see --help)\n";
+    std::cerr << "crunchhost: choose a mode: --sim, --robot or --replay FILE (see --help)\n";
     return 2;
   }
   if (!scene.empty()) opt.scene_path = scene;

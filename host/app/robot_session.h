@@ -1,0 +1,121 @@
+// The data path of `crunchhost --robot` and `crunchhost --replay` (paper §2.1-2.8), one input
+// chunk at a time and in the order the control loop handled them:
+//
+//   bridge bytes --> io::BridgeStreamDecoder --> io::SampleAssembler --> signal::SignalPipeline
+//                                                                            | episodes
+//   Create bytes --> io::oi::SensorTracker (odometry, bumpers)               v
+//                          | pose per pipeline sample ------------> WhiskEvidence (reports,
+//                                                                     free rays) per whisk
+//   whisk-end marks ------------------------------------------------> Mapper (blackboard)
+//
+// Live, the control loop hands each chunk to handle() as it reads it — the USB chunks out of the
+// SPSC ring, the Create's bytes from the driver's byte tap, a mark when a body whisk ends — and
+// handle() records it first. A replay reads the same records from the file and hands them to
+// handle() in the same order, so every decoder, parser, pipeline and sampler state — and the
+// map — comes out the same.
+//
+// Poses: the map frame is the one the robot started in, placed at Options::start; the pose of a
+// pipeline sample is the odometry when its bridge chunk was handled (the Create streams every
+// 15 ms; at the whisk's pi/24 rad/s that is 0.1 degrees).
+//
+// Ownership: owns every stage; the recorder, if set, is not owned. Thread-safety: none; the
+// control loop (or the replay) owns a session. Allocation: handle() of bridge and Create chunks
+// allocates nothing once the run is warm (the pose history is allocated at create()); a whisk's
+// end allocates the mapper's new shapelets and per-pose MAP.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "crunch/core/result.h"
+#include "crunch/io/bridge_stream.h"
+#include "crunch/io/create_oi.h"
+#include "crunch/io/recording.h"
+#include "crunch/io/sample_assembler.h"
+#include "crunch/mapping/mapper.h"
+#include "crunch/mapping/whisk_evidence.h"
+#include "crunch/signal/pipeline.h"
+
+namespace crunch::app {
+
+struct RobotSessionOptions {
+  signal::SignalModels models;
+  signal::PipelineOptions pipeline;
+  std::vector<WhiskerMount> mounts;  // the four horizontal whiskers, whisker w on board w
+  MappingOptions mapping;
+  Pose2 start;             // where the robot starts, in the map frame
+  Vec2 area_lo{0.0, 0.0};  // the region it maps (the negative-evidence grid's extent)
+  Vec2 area_hi{6.0, 6.0};
+  bool checksum_includes_header = true;  // the Create 1's checksum quirk (io/create_oi.h)
+};
+
+struct RobotSessionCounts {
+  std::uint64_t bridge_chunks = 0, create_chunks = 0, marks = 0;
+  std::uint64_t samples = 0;   // SampleFrames fed to the pipeline
+  std::uint64_t episodes = 0;  // contact episodes
+  int whisks = 0;              // groups handed to the mapper
+  int reports = 0;             // contact reports handed to the mapper
+};
+
+class RobotSession {
+ public:
+  // Errors: the models do not fit the pipeline (signal::SignalPipeline::setModels), bad options.
+  static Result<std::unique_ptr<RobotSession>> create(const RobotSessionOptions& options);
+  RobotSession(const RobotSession&) = delete;
+  RobotSession& operator=(const RobotSession&) = delete;
+
+  // Records the chunk to `recorder` (if set), then processes it. An Error is the recorder's.
+  Status handle(const io::Chunk& chunk);
+  // Writes and handles a kWhiskEnd mark now (live).
+  Status endWhisk(std::uint64_t t_ns) { return mark(io::MarkKind::kWhiskEnd, t_ns); }
+  // Every chunk handled from now on is recorded first (nullptr: none).
+  void setRecorder(io::RecordingWriter* recorder) { recorder_ = recorder; }
+
+  // Bit w set while whisker w's detector is in contact (what the behaviour acts on).
+  std::uint32_t contactMask() const;
+  // The odometry pose in the map frame.
+  Pose2 pose() const;
+  bool bumped() const { return tracker_.bumped(); }
+  // The pipeline's detectors have calibrated their rest (the robot may move).
+  bool calibrated() const;
+
+  // The map so far (no random draws) and the final one (call once, after the last chunk: ends
+  // an open whisk first).
+  Map snapshot() const { return mapper_.snapshot(); }
+  Map finish();
+
+  const RobotSessionCounts& counts() const { return counts_; }
+  const io::BridgeStreamCounters& decoderCounters() const { return decoder_.counters(); }
+  const io::SampleAssembler::Counters& assemblerCounters() const { return assembler_.counters(); }
+  const io::oi::SensorTracker& tracker() const { return tracker_; }
+  const WhiskEvidence::Counts& evidenceCounts() const { return evidence_.counts(); }
+  // Writes and handles a kBridgeReconnected mark: forgets partial frames, per-board baselines
+  // and queued readings (the bridge was replugged).
+  Status bridgeReconnected(std::uint64_t t_ns);
+
+ private:
+  RobotSession(const RobotSessionOptions& options, signal::SignalPipeline pipeline);
+  void onSample(const signal::SampleFrame& frame);
+  void takeEpisode(const signal::ContactEpisode& episode);
+  Status mark(io::MarkKind kind, std::uint64_t t_ns);
+  void closeWhisk();
+  Pose2 poseAtSample(std::uint64_t index) const;
+
+  RobotSessionOptions options_;
+  io::RecordingWriter* recorder_ = nullptr;
+  io::BridgeStreamDecoder decoder_;
+  io::SampleAssembler assembler_;
+  signal::SignalPipeline pipeline_;
+  io::oi::SensorTracker tracker_;
+  WhiskEvidence evidence_;
+  Mapper mapper_;
+  std::vector<Pose2> pose_history_;  // ring: the pose of pipeline sample i at i % size
+  Pose2 free_pose_;
+  std::uint32_t free_mask_ = 0;
+  std::vector<ContactReport> reports_;
+  std::vector<FreeRay> free_rays_;
+  RobotSessionCounts counts_;
+};
+
+}  // namespace crunch::app
