@@ -170,6 +170,8 @@ struct UsbBridge::Impl {
   mutable std::mutex path_mu;
   std::string path;
 
+  std::mutex ctx_mu;  // guards replacing `ctx` (event thread) against stop()'s interrupt
+
   std::mutex stop_mu;
   std::thread thread;
 
@@ -185,6 +187,30 @@ struct UsbBridge::Impl {
   std::string deviceName() const {
     std::lock_guard<std::mutex> lock(path_mu);
     return "the whisker bridge " + id_text + (path.empty() ? "" : " at " + path);
+  }
+
+  void registerHotplug() {
+    if (!opt.use_hotplug || !libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) return;
+    const int r = libusb_hotplug_register_callback(
+        ctx.get(), LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, LIBUSB_HOTPLUG_NO_FLAGS, opt.id.vid,
+        opt.id.pid, LIBUSB_HOTPLUG_MATCH_ANY, &Impl::onHotplug, this, &hotplug);
+    hotplug_registered = (r == 0);  // without it the poll still finds the device
+  }
+
+  // A fresh context enumerates the bus afresh. With a hotplug-capable backend libusb's device
+  // list changes only on hotplug events, which never come where no udev daemon runs (many
+  // containers) or a monitor missed them; the poll must not depend on them. Only while no
+  // device is open (no transfers refer to the old context).
+  void renewContext() {
+    libusb_context* fresh = nullptr;
+    if (libusb_init(&fresh) != 0) return;  // keep the old one; the next poll tries again
+    if (hotplug_registered) libusb_hotplug_deregister_callback(ctx.get(), hotplug);
+    hotplug_registered = false;
+    {
+      std::lock_guard<std::mutex> lock(ctx_mu);
+      ctx.reset(fresh);
+    }
+    registerHotplug();
   }
 
   static void LIBUSB_CALL onTransfer(libusb_transfer* t) {
@@ -257,7 +283,7 @@ struct UsbBridge::Impl {
 
   void cancelAll() {
     for (auto& s : slots)
-      if (s.in_flight) libusb_cancel_transfer(s.transfer.get());
+      if (s.in_flight && s.transfer) libusb_cancel_transfer(s.transfer.get());
   }
 
   // Handles events until every transfer is back; false if kDrainDeadline passed first.
@@ -279,8 +305,14 @@ struct UsbBridge::Impl {
       leaked = true;
       return;
     }
-    // libusb_free_transfer() reads transfer->dev_handle: never leave it dangling.
-    for (auto& s : slots) s.transfer->dev_handle = nullptr;
+    // A completed transfer keeps a reference to its device until it is resubmitted or freed
+    // (libusb 1.0.26), and libusb_free_transfer() reads transfer->dev_handle. Free them now,
+    // while the device and its context live, with no dangling handle; openDevice() makes new
+    // ones. (A reconnection may replace the context.)
+    for (auto& s : slots) {
+      s.transfer->dev_handle = nullptr;
+      s.transfer.reset();
+    }
     handle.reset();
   }
 
@@ -343,6 +375,11 @@ struct UsbBridge::Impl {
     closing = false;
     consecutive_errors = 0;
     for (auto& s : slots) {
+      if (!s.transfer) s.transfer.reset(libusb_alloc_transfer(0));
+      if (!s.transfer) {
+        closeDevice();
+        return Error{"whisker bridge " + id_text + ": out of memory for USB transfers"};
+      }
       libusb_fill_bulk_transfer(s.transfer.get(), handle->get(), opt.endpoint, s.buffer.data(),
                                 opt.transfer_size, &Impl::onTransfer, &s, opt.timeout_ms);
       r = libusb_submit_transfer(s.transfer.get());
@@ -410,7 +447,9 @@ struct UsbBridge::Impl {
       }
       if (!handle) {
         const auto now = std::chrono::steady_clock::now();
-        if (hotplug_arrived.exchange(false) || now >= next_poll) {
+        const bool arrived = hotplug_arrived.exchange(false);
+        if (arrived || now >= next_poll) {
+          if (!arrived) renewContext();
           next_poll = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                                 std::chrono::duration<double>(opt.reconnect_poll_s));
           if (openDevice()) {
@@ -476,8 +515,6 @@ Result<std::unique_ptr<UsbBridge>> UsbBridge::open(const Options& options, Chunk
   impl->slots.resize(static_cast<std::size_t>(options.transfers));
   for (auto& s : impl->slots) {
     s.impl = impl.get();
-    s.transfer.reset(libusb_alloc_transfer(0));
-    if (!s.transfer) return Error{"whisker bridge " + id_text + ": out of memory for transfers"};
     s.buffer.assign(static_cast<std::size_t>(options.transfer_size), 0);
   }
 
@@ -487,13 +524,7 @@ Result<std::unique_ptr<UsbBridge>> UsbBridge::open(const Options& options, Chunk
   if (Status s = im.openDevice(); !s) return s.error();
   bridge->connected_.store(true);
 
-  if (options.use_hotplug && libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
-    const int r = libusb_hotplug_register_callback(
-        im.ctx.get(), LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, LIBUSB_HOTPLUG_NO_FLAGS,
-        options.id.vid, options.id.pid, LIBUSB_HOTPLUG_MATCH_ANY, &Impl::onHotplug, &im,
-        &im.hotplug);
-    im.hotplug_registered = (r == 0);  // without it the poll still finds the device
-  }
+  im.registerHotplug();
   im.thread = std::thread([&im] { im.run(); });
   return bridge;
 }
@@ -504,7 +535,10 @@ void UsbBridge::stop() {
   std::lock_guard<std::mutex> lock(impl_->stop_mu);
   if (impl_->thread.joinable()) {
     impl_->stop_requested.store(true);
-    libusb_interrupt_event_handler(impl_->ctx.get());
+    {
+      std::lock_guard<std::mutex> ctx_lock(impl_->ctx_mu);
+      libusb_interrupt_event_handler(impl_->ctx.get());
+    }
     impl_->thread.join();
   } else if (impl_->handle) {  // open() failed after opening: not reached today, kept safe
     impl_->stop_requested.store(true);

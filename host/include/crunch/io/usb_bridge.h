@@ -17,7 +17,8 @@
 // message naming the device. The bridge keeps its counters and keeps looking for the device —
 // on a libusb hotplug arrival where the platform has hotplug (LIBUSB_CAP_HAS_HOTPLUG), and by
 // polling every Options::reconnect_poll_s regardless, since hotplug events may not reach every
-// backend. When it is back it is opened and claimed again, the transfers are resubmitted, the
+// backend (each poll enumerates through a fresh libusb context, so it does not depend on
+// udev events either: no udev daemon in a container, a monitor that missed the event). When it is back it is opened and claimed again, the transfers are resubmitted, the
 // StateHandler gets kConnected and chunks flow again. The decoder should then be resync()ed.
 //
 // Ownership: every libusb object (context, device list, device handle with its claimed
