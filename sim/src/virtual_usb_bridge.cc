@@ -77,6 +77,9 @@ struct VirtualUsbBridge::Impl {
   std::string devnode;   // "/dev/bus/usb/001/NNN" of the plugged device
   std::vector<std::string> attached;  // every node the handler was attached to
   UMockdevIoctlClient* claimed_by = nullptr;  // not a ref: compared only
+  // umockdev sends uevents through the preload's netlink emulation; without the preload in
+  // this process they fail (clients then find a replugged device by polling only).
+  bool send_uevents = false;
   std::uint64_t urbs_completed = 0;
   std::uint64_t bytes_delivered = 0;
 
@@ -142,7 +145,7 @@ struct VirtualUsbBridge::Impl {
       return false;
     }
     syspath = "/sys/devices/usb1";
-    umockdev_testbed_uevent(testbed, syspath.c_str(), "add");
+    if (send_uevents) umockdev_testbed_uevent(testbed, syspath.c_str(), "add");
     return true;
   }
 
@@ -352,6 +355,7 @@ Result<std::unique_ptr<VirtualUsbBridge>> VirtualUsbBridge::create(const Options
     return Error{"virtual USB bridge: endpoint must be an IN address (bit 7 set), e.g. 0x81"};
   auto impl = std::make_unique<Impl>();
   impl->opt = options;
+  impl->send_uevents = preloaded();
   impl->testbed = umockdev_testbed_new();
   if (impl->testbed == nullptr) return Error{"virtual USB bridge: cannot create a umockdev testbed"};
   impl->handler = umockdev_ioctl_base_new();
@@ -373,7 +377,7 @@ void VirtualUsbBridge::unplug() {
   std::lock_guard<std::mutex> lock(impl_->mu);
   if (!impl_->is_plugged) return;
   impl_->is_plugged = false;  // the handler fails every URB and ioctl of the old node from now
-  umockdev_testbed_uevent(impl_->testbed, impl_->syspath.c_str(), "remove");
+  if (impl_->send_uevents) umockdev_testbed_uevent(impl_->testbed, impl_->syspath.c_str(), "remove");
   umockdev_testbed_remove_device(impl_->testbed, impl_->syspath.c_str());
   impl_->claimed_by = nullptr;
 }

@@ -24,7 +24,9 @@
 // Preload: libusb sees the testbed only in a process that runs with libumockdev-preload.so.0
 // loaded (LD_PRELOAD, as umockdev-wrapper does). ensurePreloaded() re-executes a test binary
 // with it; a child process needs LD_PRELOAD=libumockdev-preload.so.0 and the inherited
-// UMOCKDEV_DIR (see docs/USB.md).
+// UMOCKDEV_DIR (see docs/USB.md). The uevents of unplug()/replug() (libusb hotplug) are sent
+// only when this process runs with the preload too; without them clients find a replugged
+// device by polling.
 // Ownership: the bridge owns the testbed; destroying it removes the temporary tree and unsets
 // UMOCKDEV_DIR. Destroy it only after every client has closed the device.
 #pragma once
