@@ -73,6 +73,7 @@ Status RobotSession::handle(const io::Chunk& chunk) {
     case io::StreamId::kMark:
       ++counts_.marks;
       if (chunk.size >= 1) {
+        if (chunk.bytes[0] == static_cast<std::uint8_t>(io::MarkKind::kWhiskStart)) openWhisk();
         if (chunk.bytes[0] == static_cast<std::uint8_t>(io::MarkKind::kWhiskEnd)) closeWhisk();
         if (chunk.bytes[0] == static_cast<std::uint8_t>(io::MarkKind::kBridgeReconnected)) {
           decoder_.resync();
@@ -107,8 +108,19 @@ void RobotSession::onSample(const signal::SampleFrame& frame) {
 }
 
 void RobotSession::takeEpisode(const signal::ContactEpisode& episode) {
+  if (!in_whisk_) {
+    ++counts_.roaming_episodes;
+    return;
+  }
   ++counts_.episodes;
   evidence_.take(episode, [this](std::uint64_t i) { return poseAtSample(i); });
+}
+
+void RobotSession::openWhisk() {
+  // The episode of the contact that started this whisk is still open (the robot stops on it
+  // without reversing) and becomes the whisk's first: its f1 is the peak over the sweep.
+  evidence_.discardReports();
+  in_whisk_ = true;
 }
 
 void RobotSession::closeWhisk() {
@@ -124,6 +136,7 @@ void RobotSession::closeWhisk() {
   counts_.reports += static_cast<int>(reports_.size());
   ++counts_.whisks;
   evidence_.begin();
+  in_whisk_ = false;
 }
 
 Status RobotSession::bridgeReconnected(std::uint64_t t_ns) {

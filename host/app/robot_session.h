@@ -14,6 +14,14 @@
 // handle() in the same order, so every decoder, parser, pipeline and sampler state — and the
 // map — comes out the same.
 //
+// Which contacts are reported: the episodes that end between a kWhiskStart mark (the toward
+// leg begins) and the kWhiskEnd mark — the body whisk's own, including the episode of the
+// contact that started it, which the sweep continues (the robot stops on the contact and whisks
+// without reversing: see robot_mode.h). Episodes that end outside a whisk (a whisker brushing
+// something while the robot drives or turns) are counted (RobotSessionCounts::roaming_episodes)
+// and not reported: the radial model was trained on sweeps, not on pushes. Rays swept free
+// count at all times (negative evidence).
+//
 // Poses: the map frame is the one the robot started in, placed at Options::start; the pose of a
 // pipeline sample is the odometry when its bridge chunk was handled (the Create streams every
 // 15 ms; at the whisk's pi/24 rad/s that is 0.1 degrees).
@@ -53,7 +61,8 @@ struct RobotSessionOptions {
 struct RobotSessionCounts {
   std::uint64_t bridge_chunks = 0, create_chunks = 0, marks = 0;
   std::uint64_t samples = 0;   // SampleFrames fed to the pipeline
-  std::uint64_t episodes = 0;  // contact episodes
+  std::uint64_t episodes = 0;  // contact episodes within whisks (reported from)
+  std::uint64_t roaming_episodes = 0;  // contact episodes outside a whisk's sweep (not reported)
   int whisks = 0;              // groups handed to the mapper
   int reports = 0;             // contact reports handed to the mapper
 };
@@ -67,7 +76,8 @@ class RobotSession {
 
   // Records the chunk to `recorder` (if set), then processes it. An Error is the recorder's.
   Status handle(const io::Chunk& chunk);
-  // Writes and handles a kWhiskEnd mark now (live).
+  // Write and handle a kWhiskStart / kWhiskEnd mark now (live).
+  Status beginWhisk(std::uint64_t t_ns) { return mark(io::MarkKind::kWhiskStart, t_ns); }
   Status endWhisk(std::uint64_t t_ns) { return mark(io::MarkKind::kWhiskEnd, t_ns); }
   // Every chunk handled from now on is recorded first (nullptr: none).
   void setRecorder(io::RecordingWriter* recorder) { recorder_ = recorder; }
@@ -99,6 +109,7 @@ class RobotSession {
   void onSample(const signal::SampleFrame& frame);
   void takeEpisode(const signal::ContactEpisode& episode);
   Status mark(io::MarkKind kind, std::uint64_t t_ns);
+  void openWhisk();
   void closeWhisk();
   Pose2 poseAtSample(std::uint64_t index) const;
 
@@ -113,6 +124,7 @@ class RobotSession {
   std::vector<Pose2> pose_history_;  // ring: the pose of pipeline sample i at i % size
   Pose2 free_pose_;
   std::uint32_t free_mask_ = 0;
+  bool in_whisk_ = false;
   std::vector<ContactReport> reports_;
   std::vector<FreeRay> free_rays_;
   RobotSessionCounts counts_;

@@ -200,6 +200,9 @@ Status WhiskeredRobot::Options::validate() const {
   }
   if (!positive(wheel_base)) return optionError("wheel_base", "must be finite and > 0");
   if (!positive(max_wheel_speed)) return optionError("max_wheel_speed", "must be finite and > 0");
+  if (!(std::isfinite(max_wheel_acceleration) && max_wheel_acceleration >= 0.0)) {
+    return optionError("max_wheel_acceleration", "must be finite and >= 0");
+  }
   return okStatus();
 }
 
@@ -382,7 +385,7 @@ void WhiskeredRobot::resetWhiskers() {
 void WhiskeredRobot::place(const Pose2& pose) {
   assert(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta));
   pose_ = pose;
-  v_ = omega_ = left_ = right_ = 0.0;
+  v_ = omega_ = left_ = right_ = target_left_ = target_right_ = 0.0;
   resetWhiskers();
   bumped_ = world_.bodyCollides(pose_);
 }
@@ -393,10 +396,14 @@ Status WhiskeredRobot::drive(double v, double omega) {
   }
   const double half = 0.5 * options_.wheel_base;
   const double lim = options_.max_wheel_speed;
-  left_ = std::clamp(v - omega * half, -lim, lim);
-  right_ = std::clamp(v + omega * half, -lim, lim);
-  v_ = 0.5 * (left_ + right_);
-  omega_ = (right_ - left_) / options_.wheel_base;
+  target_left_ = std::clamp(v - omega * half, -lim, lim);
+  target_right_ = std::clamp(v + omega * half, -lim, lim);
+  if (options_.max_wheel_acceleration <= 0.0) {  // the wheels take the new speed at once
+    left_ = target_left_;
+    right_ = target_right_;
+    v_ = 0.5 * (left_ + right_);
+    omega_ = (right_ - left_) / options_.wheel_base;
+  }
   return okStatus();
 }
 
@@ -409,6 +416,14 @@ double WhiskeredRobot::clearance(const Pose2& p) const {
 }
 
 void WhiskeredRobot::moveBase(double h) {
+  if (options_.max_wheel_acceleration > 0.0) {
+    // Each wheel ramps toward its commanded speed at the motor's acceleration limit.
+    const double dv = options_.max_wheel_acceleration * h;
+    left_ += std::clamp(target_left_ - left_, -dv, dv);
+    right_ += std::clamp(target_right_ - right_, -dv, dv);
+    v_ = 0.5 * (left_ + right_);
+    omega_ = (right_ - left_) / options_.wheel_base;
+  }
   double v = v_;
   Pose2 next = integrateArc(pose_, v, omega_, h);
   if (v != 0.0) {

@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
@@ -75,21 +76,27 @@ int main(int argc, char** argv) {
   std::vector<double> start;
   std::uint64_t seed = 1;
   double rate = 1.0, time_limit = 300.0;
+  double wheel_acceleration = 0.5;  // m/s^2, an assumption (whisker_physics.h)
   double unplug_at = -1.0, replug_at = -1.0, garbage_every = 0.0;
   int corrupt_every = 0;
   bool silent = false;
+  bool log_contacts = false;
   std::vector<std::string> child;
   app.add_option("--scene", scene_path, "scene file (ARCHITECTURE.md §4)")->required();
   app.add_option("--start", start, "start pose x y theta (default: the scene's first pose)")
       ->expected(3);
   app.add_option("--seed", seed, "Hall sensor noise seed");
   app.add_option("--rate", rate, "simulated seconds per wall-clock second");
+  app.add_option("--wheel-acceleration", wheel_acceleration,
+                 "the base's wheel acceleration limit, m/s^2 (0: instant)");
   app.add_option("--time-limit", time_limit, "wall-clock seconds before the child is killed");
   app.add_option("--unplug-at", unplug_at, "simulated second at which the USB bridge is unplugged");
   app.add_option("--replug-at", replug_at, "simulated second at which it is plugged back");
   app.add_option("--corrupt-every", corrupt_every, "flip one byte of every Nth tick's frames");
   app.add_option("--serial-garbage-every", garbage_every, "seconds between garbage on the serial line");
   app.add_flag("--create-silent", silent, "the Create never answers");
+  app.add_flag("--log-contacts", log_contacts,
+               "print each true whisker contact (ODE) as it begins, on stderr");
   app.add_option("child", child, "the program to run, after --")->required();
   CLI11_PARSE(app, argc, argv);
 
@@ -108,8 +115,12 @@ int main(int argc, char** argv) {
     return 2;
   }
   auto world = sim::World::build(scene.value());
-  auto rig = sim::WhiskerRig::create(*world, defaultWhiskerArray(), start_pose,
-                                     sim::physicsRigOptions(seed));
+  // The rig the shipped models were trained with, on a base whose wheels accelerate like a real
+  // one's (whisker_physics.h: an instant step of the turn rate swings the whiskers past the
+  // contact threshold).
+  sim::WhiskerRig::Options rig_options = sim::physicsRigOptions(seed);
+  rig_options.robot.max_wheel_acceleration = wheel_acceleration;
+  auto rig = sim::WhiskerRig::create(*world, defaultWhiskerArray(), start_pose, rig_options);
   if (!rig) {
     std::cerr << "crunch-virtual-robot: " << rig.error().message << "\n";
     return 2;
@@ -143,6 +154,7 @@ int main(int argc, char** argv) {
   std::uint64_t ticks = 0, corrupted = 0, garbage = 0;
   double next_garbage = garbage_every > 0.0 ? sim0 + garbage_every : -1.0;
   bool unplugged = false, replugged = false;
+  std::array<bool, 4> touching{}, detecting{};
   int status = 0;
   int exit_code = -1;
   while (true) {
@@ -165,6 +177,24 @@ int main(int argc, char** argv) {
     while (r.robot().now() < target && steps < 400) {
       (void)r.step();
       ++ticks;
+      if (log_contacts) {
+        for (int w = 0; w < 4; ++w) {
+          const auto c = r.robot().contact(w);
+          if (c.has_value() != touching[static_cast<std::size_t>(w)] && c.has_value()) {
+            const Pose2 q = r.robot().odometry();
+            std::cerr << "truth: t " << r.robot().now() - sim0 << " whisker " << w << " touches ("
+                      << c->point.x() << ", " << c->point.y() << ") r " << c->r << " from pose ("
+                      << q.x << ", " << q.y << ", " << q.theta << ")\n";
+          }
+          touching[static_cast<std::size_t>(w)] = c.has_value();
+          const bool detected = (r.contactMask() >> w) & 1u;
+          if (detected && !detecting[static_cast<std::size_t>(w)]) {
+            std::cerr << "detector: t " << r.robot().now() - sim0 << " whisker " << w
+                      << " onset, base angle " << r.robot().baseAngles(w).horizontal << "\n";
+          }
+          detecting[static_cast<std::size_t>(w)] = detected;
+        }
+      }
       const auto bytes = r.lastTickBytes();
       const std::size_t at = batch.size();
       batch.insert(batch.end(), bytes.begin(), bytes.end());

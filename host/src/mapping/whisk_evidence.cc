@@ -38,6 +38,10 @@ void WhiskEvidence::fill(Entry& e, std::size_t w, const signal::ContactEpisode& 
   e.report.phi = halfTurn(ep.orientation.angle + onset.theta - peak.theta);
 }
 
+void WhiskEvidence::discardReports() {
+  for (Entry& e : entries_) e = Entry{};
+}
+
 void WhiskEvidence::sample(const Pose2& pose, std::uint32_t contact_mask) {
   samples_.push_back({pose, contact_mask});
 }

@@ -175,6 +175,13 @@ class WhiskeredRobot final : public MobileBase {
     double contact_damping = 1.0;
     double wheel_base = 0.258;      // Create wheel separation, metres (OI specification)
     double max_wheel_speed = 0.5;   // Create, m/s per wheel (OI specification)
+    // Largest change of a wheel's speed, m/s^2; 0: the wheels take a commanded speed at once
+    // (the default, with which the signal models were trained: in-place whisks at pi/24 rad/s
+    // barely accelerate). A roaming robot needs a limit: stepping the turn rate to pi/4 rad/s
+    // at once swings every whisker 12-20 mrad, past the contact detector's onset threshold
+    // (docs/ROBOT.md). The Create's own limit is not published; crunch-virtual-robot uses
+    // 0.5 m/s^2 (an assumption).
+    double max_wheel_acceleration = 0.0;
 
     Status validate() const;
   };
@@ -315,6 +322,7 @@ class WhiskeredRobot final : public MobileBase {
 
   Pose2 pose_;
   double v_ = 0.0, omega_ = 0.0, left_ = 0.0, right_ = 0.0;
+  double target_left_ = 0.0, target_right_ = 0.0;  // commanded wheel speeds, m/s
   double time_ = 0.0;
   bool bumped_ = false;
   long long refused_steps_ = 0;

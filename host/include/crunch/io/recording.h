@@ -43,6 +43,7 @@ enum class StreamId : std::uint8_t {
 enum class MarkKind : std::uint8_t {
   kWhiskEnd = 1,           // one body whisk ended: its contacts form one group for the mapper
   kBridgeReconnected = 2,  // the USB bridge came back: partial frames and baselines forgotten
+  kWhiskStart = 3,         // a body whisk's sweep begins: contacts from here on are its own
 };
 
 inline constexpr std::size_t kMaxChunkBytes = 4096;

@@ -75,6 +75,9 @@ class WhiskEvidence {
     }
     return set;
   }
+  // Forgets the entries taken so far (contacts that are not the whisk's own); keeps the
+  // negative-evidence samples.
+  void discardReports();
   // One negative-evidence sample: the pose now and the whiskers in contact (bit w = whisker w).
   void sample(const Pose2& pose, std::uint32_t contact_mask);
   // Ends the whisk: appends the reports to `reports` and the free rays to `free_rays`.
