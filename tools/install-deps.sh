@@ -8,7 +8,7 @@ PACKAGES=(
   libeigen3-dev libode-dev libcairo2-dev libusb-1.0-0-dev
   catch2 libbenchmark-dev libcli11-dev nlohmann-json3-dev
   gcc-avr avr-libc simavr
-  umockdev libumockdev-dev gir1.2-umockdev-1.0 python3-gi
+  umockdev libumockdev-dev
 )
 
 missing=()

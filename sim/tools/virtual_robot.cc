@@ -13,7 +13,8 @@
 //
 // Faults (for the tests): --unplug-at/--replug-at (seconds of simulated time), --corrupt-every N
 // (one byte of every Nth tick's bridge bytes flipped), --serial-garbage-every S (garbage bytes
-// on the Create's line), --create-silent (a Create that never answers).
+// on the Create's line), --create-silent (a Create that never answers), --interrupt-at (SIGINT
+// to the child, as Ctrl-C).
 //
 // When the child exits, prints one JSON line on stdout (the robot's true final pose, counters)
 // and exits with the child's status (124 if --time-limit killed it).
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
   int corrupt_every = 0;
   bool silent = false;
   bool log_contacts = false;
+  double interrupt_at = -1.0;
   std::vector<std::string> child;
   app.add_option("--scene", scene_path, "scene file (ARCHITECTURE.md §4)")->required();
   app.add_option("--start", start, "start pose x y theta (default: the scene's first pose)")
@@ -95,6 +97,8 @@ int main(int argc, char** argv) {
   app.add_option("--corrupt-every", corrupt_every, "flip one byte of every Nth tick's frames");
   app.add_option("--serial-garbage-every", garbage_every, "seconds between garbage on the serial line");
   app.add_flag("--create-silent", silent, "the Create never answers");
+  app.add_option("--interrupt-at", interrupt_at,
+                 "simulated second at which the child gets SIGINT (Ctrl-C)");
   app.add_flag("--log-contacts", log_contacts,
                "print each true whisker contact (ODE) as it begins, on stderr");
   app.add_option("child", child, "the program to run, after --")->required();
@@ -217,6 +221,11 @@ int main(int argc, char** argv) {
       replugged = true;
       std::cerr << "crunch-virtual-robot: plugged the USB bridge back at " << now << " s\n";
     }
+    if (interrupt_at >= 0.0 && now >= interrupt_at) {
+      kill(pid, SIGINT);
+      interrupt_at = -1.0;
+      std::cerr << "crunch-virtual-robot: sent SIGINT to the child at " << now << " s\n";
+    }
     if (next_garbage >= 0.0 && r.robot().now() >= next_garbage) {
       static const std::uint8_t kGarbage[] = {0x13, 0x05, 0xFF, 0x13, 0x00, 0x42, 0x13};
       create.injectGarbage(kGarbage);
@@ -239,7 +248,8 @@ int main(int argc, char** argv) {
       {"garbage_bytes", garbage},
       {"usb", {{"urbs", bridge.urbsCompleted()}, {"bytes", bridge.bytesDelivered()}}},
       {"create", {{"commands", create.counters().commands},
-                  {"packets", create.counters().packets_sent}}}};
+                  {"packets", create.counters().packets_sent},
+                  {"last_wheels_mm_s", {create.requestedRight(), create.requestedLeft()}}}}};
   std::cout << summary.dump() << std::endl;
   return exit_code;
 }
