@@ -198,7 +198,10 @@ TEST_CASE("Robot: the virtual robot maps by touch; --replay gives the same map; 
 
 TEST_CASE("Robot: the bridge unplugged mid-run stops the robot, keeps the map and resumes",
           "[hil]") {
-  if (realHardware()) return;  // unplugging is done by hand on the real robot (docs/ROBOT.md)
+  if (realHardware()) {  // unplugging is done by hand on the real robot (docs/ROBOT.md)
+    WARN("hil: real devices: this fault case needs the virtual ones and was not run");
+    return;
+  }
   TempDir dir;
   const Run r = virtualRobot("--unplug-at 8 --replug-at 13",
                              "--duration 25 --json --out " + dir.path().string());
@@ -223,7 +226,10 @@ TEST_CASE("Robot: the bridge unplugged mid-run stops the robot, keeps the map an
 
 TEST_CASE("Robot: corrupt frames and serial garbage are counted and never reach the pipeline",
           "[hil]") {
-  if (realHardware()) return;  // faults are injected by the virtual devices only
+  if (realHardware()) {  // faults are injected by the virtual devices only
+    WARN("hil: real devices: this fault case needs the virtual ones and was not run");
+    return;
+  }
   TempDir dir;
   const Run r = virtualRobot("--corrupt-every 97 --serial-garbage-every 0.5",
                              "--duration 20 --out " + dir.path().string());
@@ -254,7 +260,10 @@ TEST_CASE("Robot: corrupt frames and serial garbage are counted and never reach 
 }
 
 TEST_CASE("Robot: SIGINT stops the robot, flushes the recording and writes the map", "[hil]") {
-  if (realHardware()) return;  // Ctrl-C on the real robot is the same code path
+  if (realHardware()) {  // Ctrl-C on the real robot is the same code path
+    WARN("hil: real devices: this fault case needs the virtual ones and was not run");
+    return;
+  }
   TempDir dir;
   const fs::path out = dir.path() / "live";
   const Run r = virtualRobot("--interrupt-at 12", "--duration 0 --out " + out.string());
@@ -280,7 +289,10 @@ TEST_CASE("Robot: SIGINT stops the robot, flushes the recording and writes the m
 }
 
 TEST_CASE("Robot: a Create that never answers is a clear error in bounded time", "[hil]") {
-  if (realHardware()) return;
+  if (realHardware()) {
+    WARN("hil: real devices: the silent Create needs the emulator and was not run");
+    return;
+  }
   TempDir dir;
   const Run r = virtualRobot("--create-silent", "--duration 20 --out " + dir.path().string());
   INFO(r.output);
