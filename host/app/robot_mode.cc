@@ -201,8 +201,16 @@ json sessionReport(const RobotSession& session, const Map& map) {
           {"shapelets", shapelets}};
 }
 
-Status writeReport(const std::string& out_dir, const json& report) {
-  return writeFileAtomic(out_dir + "/report.json", report.dump(2) + "\n");
+// map.json, map.png, then report.json; stops at the first failure. 0, or 1 with the error said.
+int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string& out_dir,
+                 const std::string& title, const json& report, std::ostream& err) {
+  Status st = writeMapFiles(map, s, out_dir, title);
+  if (st) st = writeFileAtomic(out_dir + "/report.json", report.dump(2) + "\n");
+  if (!st) {
+    err << "crunchhost: " << st.error().message << "\n";
+    return 1;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -486,14 +494,8 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
   report["create_watchdog_stops"] = base.watchdogStops();
   if (recorder) report["recording"] = recorder->path();
   if (!failure) report["error"] = failure.error().message;
-  if (auto s = writeMapFiles(map, sopt, opt.out_dir, "crunchhost --robot, seed " +
-                                                         std::to_string(opt.seed));
-      !s) {
-    err << "crunchhost: " << s.error().message << "\n";
-    return 1;
-  }
-  if (auto s = writeReport(opt.out_dir, report); !s) {
-    err << "crunchhost: " << s.error().message << "\n";
+  if (writeOutputs(map, sopt, opt.out_dir, "crunchhost --robot, seed " + std::to_string(opt.seed),
+                   report, err) != 0) {
     return 1;
   }
   progress("done", stop_reason + ": " + std::to_string(session.counts().whisks) + " whisks, " +
@@ -543,13 +545,8 @@ int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
   report["records"] = reader.value()->records();
   report["wall_s"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (damaged) report["damage"] = reader.value()->damage();
-  if (auto s = writeMapFiles(map, sopt.value(), opt.out_dir, "crunchhost --replay " + opt.recording);
-      !s) {
-    err << "crunchhost: " << s.error().message << "\n";
-    return 1;
-  }
-  if (auto s = writeReport(opt.out_dir, report); !s) {
-    err << "crunchhost: " << s.error().message << "\n";
+  if (writeOutputs(map, sopt.value(), opt.out_dir, "crunchhost --replay " + opt.recording, report,
+                   err) != 0) {
     return 1;
   }
   if (opt.json_progress) {

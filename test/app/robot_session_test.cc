@@ -48,6 +48,16 @@ app::RobotSessionOptions sessionOptions(const Pose2& start) {
   return o;
 }
 
+// `n` ticks of the rig's bridge bytes into the session, one chunk each.
+void steps(sim::WhiskerRig& rig, app::RobotSession& session, int n) {
+  io::Chunk chunk;
+  for (int i = 0; i < n; ++i) {
+    (void)rig.step();
+    chunk.assign(io::StreamId::kBridge, 1, rig.lastTickBytes());
+    REQUIRE(session.handle(chunk));
+  }
+}
+
 // Feeds `session` what the robot would send while `rig` does an in-place whisk: one bridge chunk
 // per 1 ms (two ticks), an OI stream packet (bumps, distance, angle, mode) per 15 ms from the
 // rig's odometry, whisk start/end marks.
@@ -97,12 +107,7 @@ void whiskThroughSession(sim::WhiskerRig& rig, app::RobotSession& session) {
     REQUIRE(whisk.update(session.contactMask()));
   }
   REQUIRE(whisk.done());
-  // Settle: let the last episode end, as the robot backs clear.
-  for (int n = 0; n < 8000; ++n) {
-    (void)rig.step();
-    chunk.assign(io::StreamId::kBridge, t_ns += 500000, rig.lastTickBytes());
-    REQUIRE(session.handle(chunk));
-  }
+  steps(rig, session, 8000);  // let the last episode end, as the robot backs clear
   REQUIRE(session.endWhisk(t_ns));
 }
 
@@ -126,14 +131,9 @@ TEST_CASE("RobotSession: a whisk at a leg is reported, recorded, and replays to 
   REQUIRE(writer);
   live.setRecorder(writer.value().get());
 
-  // The rig's detectors calibrated in create(); the session's need 1 s of rest first.
-  io::Chunk chunk;
-  for (int n = 0; n < 2400; ++n) {
-    (void)rig.value()->step();
-    chunk.assign(io::StreamId::kBridge, 1, rig.value()->lastTickBytes());
-    REQUIRE(live.handle(chunk));
-  }
+  steps(*rig.value(), live, 2400);  // the session's detectors need 1 s of rest first
   REQUIRE(live.calibrated());
+  io::Chunk chunk;
   whiskThroughSession(*rig.value(), live);
   REQUIRE(writer.value()->close());
 
@@ -189,12 +189,8 @@ TEST_CASE("RobotSession: contacts outside a whisk are counted, not reported", "[
   auto created = app::RobotSession::create(sessionOptions(start));
   REQUIRE(created);
   app::RobotSession& session = *created.value();
+  steps(*rig.value(), session, 2400);
   io::Chunk chunk;
-  for (int n = 0; n < 2400; ++n) {
-    (void)rig.value()->step();
-    chunk.assign(io::StreamId::kBridge, 1, rig.value()->lastTickBytes());
-    REQUIRE(session.handle(chunk));
-  }
   // The same sweep, but no whisk-start mark: a robot turning, not whisking.
   sim::WhiskeredRobot& robot = rig.value()->robot();
   BodyWhisk whisk(robot, BodyWhisk::Options{});
@@ -205,11 +201,7 @@ TEST_CASE("RobotSession: contacts outside a whisk are counted, not reported", "[
     REQUIRE(session.handle(chunk));
     REQUIRE(whisk.update(session.contactMask()));
   }
-  for (int n = 0; n < 8000; ++n) {
-    (void)rig.value()->step();
-    chunk.assign(io::StreamId::kBridge, 1, rig.value()->lastTickBytes());
-    REQUIRE(session.handle(chunk));
-  }
+  steps(*rig.value(), session, 8000);
   REQUIRE(session.endWhisk(2));
   CHECK(session.counts().roaming_episodes >= 1);
   CHECK(session.counts().episodes == 0);
