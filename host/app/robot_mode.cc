@@ -2,11 +2,14 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <csignal>
 #include <cmath>
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <thread>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
@@ -30,7 +33,9 @@ namespace {
 
 using json = nlohmann::json;
 
-constexpr std::size_t kRingSlots = 256;  // 256 x 4 KiB: 1 s of 28 boards at 2 kHz
+// 1024 slots: 4 MiB, 4 s of 28 boards at 2 kHz in full 4 KiB transfers; at least 0.5 s when the
+// bridge completes a transfer per frame group (about 1 ms each).
+constexpr std::size_t kRingSlots = 1024;
 constexpr char kRecordingSchema[] = "crunch.recording/1";
 
 // SIGINT/SIGTERM: the control loop sees this and shuts down in order.
@@ -213,6 +218,59 @@ int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string
   return 0;
 }
 
+// Writes the running map off the control loop: rendering and the atomic write's fsync can take
+// longer than the Create's watchdog allows the loop to stall (measured: a 0.5 s stall under disk
+// load stopped the motors and overflowed the ring). post() hands over the newest snapshot; one
+// still waiting is replaced (only the newest map matters).
+class MapWriter {
+ public:
+  MapWriter(const RobotSessionOptions& s, std::string out_dir, std::ostream& err)
+      : s_(s), out_dir_(std::move(out_dir)), err_(err), thread_([this] { loop(); }) {}
+  ~MapWriter() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    cv_.notify_one();
+    thread_.join();
+  }
+  MapWriter(const MapWriter&) = delete;
+  MapWriter& operator=(const MapWriter&) = delete;
+
+  void post(Map map) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      pending_ = std::move(map);
+    }
+    cv_.notify_one();
+  }
+
+ private:
+  void loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      cv_.wait(lock, [this] { return stop_ || pending_.has_value(); });
+      if (stop_) return;
+      Map map = std::move(*pending_);
+      pending_.reset();
+      lock.unlock();
+      if (auto st = writeMapFiles(map, s_, out_dir_, "crunchhost --robot (running)"); !st) {
+        err_ << "crunchhost: " << st.error().message << "\n";
+      }
+      lock.lock();
+    }
+  }
+
+  const RobotSessionOptions& s_;
+  std::string out_dir_;
+  std::ostream& err_;
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::optional<Map> pending_;
+  bool stop_ = false;
+  std::thread thread_;  // last: started once the rest is built
+};
+
 }  // namespace
 
 // ------------------------------------------------------------------------------------------
@@ -368,7 +426,9 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
   double next_map_s = start_s + opt.map_every_s;
   double calibrate_since = start_s;
   int seen_events = 0;
+  std::uint64_t watchdog_seen = 0;
   std::string stop_reason = "done";
+  auto map_writer = std::make_unique<MapWriter>(sopt, opt.out_dir, err);
   while (true) {
     if (const int sig = g_signal.load(); sig != 0) {
       stop_reason = std::string("stopped by ") + signalName(sig);
@@ -462,15 +522,20 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
 
     if (base.now() >= next_map_s) {
       next_map_s += opt.map_every_s;
-      if (auto s = writeMapFiles(session.snapshot(), sopt, opt.out_dir, "crunchhost --robot (running)");
-          !s) {
-        err << "crunchhost: " << s.error().message << "\n";
-      }
+      map_writer->post(session.snapshot());
+    }
+    // The driver's watchdog stopped the motors (this loop stalled): say so and drive again.
+    if (const std::uint64_t stops = base.watchdogStops(); stops != watchdog_seen) {
+      watchdog_seen = stops;
+      whisk.commandLost();
+      progress("watchdog", "the control loop stalled; the Create's watchdog stopped the motors; "
+                           "resuming");
     }
   }
 
   // ---- Shut down in order: motors, USB, the last chunks, the recording, the map.
   (void)whisk.halt();
+  map_writer.reset();  // waits for a write in progress; the final map is written below
   (void)base.stop();
   usb.stop();
   drain();

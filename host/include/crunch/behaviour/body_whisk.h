@@ -115,6 +115,9 @@ class BodyWhisk {
   Status startInPlace(int direction = +1);
   // Stops the base and goes to kIdle.
   Status halt();
+  // The base dropped the last command (its watchdog stopped the motors while the control loop
+  // stalled): the next update() sends the current phase's command again.
+  void commandLost() { sent_ = false; }
 
   // One control step; `contact` has bit w set while whisker w touches (see the top). Contact is
   // acted on only in kForward; during a whisk the whiskers are meant to touch. Returns the Error
