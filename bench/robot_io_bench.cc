@@ -9,7 +9,8 @@
 // then contact bumps, test/signal/synthetic.h); boards 4..27 read rest plus noise, and the
 // assembler counts their frames as unmapped, as the robot's does with extra boards.
 //
-// Throughput (items_per_second = frames/s of the stream, x_need = that / 56,000; real time):
+// Throughput (items_per_second = frames/s of the stream, x_need = that / 56,000; real time;
+// x_need_proc_cpu: the same from the process's CPU time, see report()):
 //   BM_RingMemcpy        baseline, ring alone: a producer thread (the USB event thread) assigns
 //                        4096-byte io::Chunks and pushes them into io::SpscRing<io::Chunk>(256);
 //                        the benchmark thread drains them and memcpys the bytes out.
@@ -49,6 +50,7 @@
 #include <span>
 #include <string>
 #include <thread>
+#include <time.h>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -225,8 +227,22 @@ class ChunkProducer {
   std::thread thread_;
 };
 
-void report(benchmark::State& state, const io::SpscRing<io::Chunk>* ring) {
+// CPU time of the whole process (producer and consumer threads), seconds.
+double processCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// `cpu_s`: the process CPU time the timed loop took. Its x_need (`x_need_proc_cpu`) is the
+// cost of the path on one core whatever else runs on the machine, when the benchmark is
+// pinned to one core (taskset -c 0): then a waiting thread yields to the other instead of
+// spinning beside it.
+void report(benchmark::State& state, const io::SpscRing<io::Chunk>* ring, double cpu_s) {
   const std::int64_t frames = streamFrames();
+  state.counters["x_need_proc_cpu"] = static_cast<double>(frames) *
+                                      static_cast<double>(state.iterations()) /
+                                      (cpu_s * kNeedFramesPerSecond);
   state.SetItemsProcessed(state.iterations() * frames);
   state.SetBytesProcessed(state.iterations() *
                           static_cast<std::int64_t>(throughputStream().size()));
@@ -244,6 +260,7 @@ void throughRing(benchmark::State& state, Consume&& consume) {
   io::SpscRing<io::Chunk> ring(kRingSlots);
   ChunkProducer producer(ring, throughputStream());
   const std::size_t chunks = producer.chunksPerPass();
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     producer.startPass();
     std::size_t got = 0;
@@ -253,7 +270,7 @@ void throughRing(benchmark::State& state, Consume&& consume) {
       got += n;
     }
   }
-  report(state, &ring);
+  report(state, &ring, processCpuSeconds() - cpu0);
 }
 
 void BM_RingMemcpy(benchmark::State& state) {
@@ -274,6 +291,7 @@ void BM_Decode(benchmark::State& state) {
   io::BridgeStreamDecoder dec;
   std::uint64_t sum = 0;
   auto sink = [&](const io::DecodedFrame& d) { sum += d.frame.alpha; };
+  const double cpu0 = processCpuSeconds();
   for (auto _ : state) {
     for (std::size_t at = 0; at < s.size(); at += io::kMaxChunkBytes)
       dec.feed(std::span<const std::uint8_t>(s).subspan(
@@ -283,7 +301,7 @@ void BM_Decode(benchmark::State& state) {
   }
   state.counters["accepted"] =
       static_cast<double>(dec.counters().frames) / static_cast<double>(state.iterations());
-  report(state, nullptr);
+  report(state, nullptr, processCpuSeconds() - cpu0);
 }
 BENCHMARK(BM_Decode)->UseRealTime();
 
