@@ -57,16 +57,22 @@ class SampleAssembler {
     const auto wi = static_cast<std::size_t>(w);
     gap = gap > debt_[wi] ? gap - debt_[wi] : 0;
     debt_[wi] = 0;
+    int n = 0;
+    // Emits after every reading queued, placeholders included, so no queue ever holds more than
+    // max_lag + 1 readings (queuing a whole gap first could overrun kQueue and lose a reading).
+    auto emit = [&] {
+      while (ready()) {
+        sink(static_cast<const signal::SampleFrame&>(pop()));
+        ++n;
+      }
+    };
     for (std::uint64_t i = 0; i < gap && i < static_cast<std::uint64_t>(options_.max_lag); ++i) {
       enqueue(w, placeholder());
       ++counters_.placeholders;
+      emit();
     }
     enqueue(w, signal::WhiskerReading{d.frame.alpha, d.frame.beta, d.frame.status});
-    int n = 0;
-    while (ready()) {
-      sink(static_cast<const signal::SampleFrame&>(pop()));
-      ++n;
-    }
+    emit();
     return n;
   }
 
