@@ -1,0 +1,264 @@
+// Tests of the incremental Mapper (crunch/mapping/mapper.h): the same reports fed pose by pose
+// give exactly runMapping's map, snapshot() changes nothing, rejected reports are counted, and a
+// pose without reports adds no per-pose MAP.
+#include "crunch/mapping/mapper.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "crunch/mapping/pipeline.h"
+
+using namespace crunch;
+
+namespace {
+
+// Reports of the four legs of a standard table at `table`, each seen by several whiskers from
+// robot poses placed so the leg's face lies on the whisker (so the shapelets are where a real
+// table's would be), plus a few free rays per pose.
+struct Script {
+  std::vector<Pose2> poses;
+  std::vector<std::vector<ContactReport>> reports;
+  std::vector<std::vector<FreeRay>> rays;
+};
+
+Script tableScript(const std::vector<WhiskerMount>& mounts) {
+  const Pose2 table{1.5, 1.2, 0.3};
+  Script s;
+  const double hx = 0.5 * (kStandardTableWidth - kStandardLegSide);
+  const double hy = 0.5 * (kStandardTableDepth - kStandardLegSide);
+  const Vec2 legs[4] = {{hx, hy}, {-hx, hy}, {-hx, -hy}, {hx, -hy}};
+  int k = 0;
+  for (const Vec2& leg_local : legs) {
+    // The leg's face nearest the outside of the table, in the world.
+    const Vec2 out_dir = leg_local.normalized();
+    const Vec2 face = table.toWorld(leg_local + 0.5 * kStandardLegSide * out_dir);
+    for (int visit = 0; visit < 3; ++visit, ++k) {
+      const int w = k % static_cast<int>(mounts.size());
+      const WhiskerMount& m = mounts[static_cast<std::size_t>(w)];
+      const double r = 0.04 + 0.02 * visit;
+      // Heading toward the leg from outside the table, varied per visit.
+      const Vec2 world_out = (face - table.position()).normalized();
+      const double theta = std::atan2(-world_out.y(), -world_out.x()) - m.bearing + 0.1 * (visit - 1);
+      // Robot position so that base + r * bearing direction lands on the face.
+      const Vec2 local = m.base + r * Vec2{std::cos(m.bearing), std::sin(m.bearing)};
+      const double c = std::cos(theta), sn = std::sin(theta);
+      const Vec2 offset{c * local.x() - sn * local.y(), sn * local.x() + c * local.y()};
+      const Pose2 pose{face.x() - offset.x(), face.y() - offset.y(), theta};
+      ContactReport rep;
+      rep.whisker = w;
+      rep.r = r;
+      rep.phi = std::fmod(table.theta - theta + 8 * kPi, kPi);
+      rep.robot = pose;
+      s.poses.push_back(pose);
+      s.reports.push_back({rep});
+      std::vector<FreeRay> rays;
+      for (const WhiskerMount& o : mounts) {
+        const Vec2 a = pose.toWorld(o.base);
+        const double d = pose.theta + o.bearing;
+        rays.push_back({a, a + o.length * Vec2{std::cos(d), std::sin(d)}});
+      }
+      s.rays.push_back(rays);
+    }
+  }
+  return s;
+}
+
+// A sensor that returns the scripted reports and rays of each pose in turn.
+class ScriptSensor : public SensorModel {
+ public:
+  explicit ScriptSensor(const Script& s) : s_(s) {}
+  void sense(const Pose2&, Rng&, std::vector<ContactReport>& out) override {
+    last_ = next_++;
+    for (const ContactReport& r : s_.reports[last_]) out.push_back(r);
+  }
+  void freeRays(std::vector<FreeRay>& out) const override {
+    for (const FreeRay& r : s_.rays[last_]) out.push_back(r);
+  }
+  const std::vector<WhiskerMount>& mounts() const override { return mounts_; }
+
+ private:
+  const Script& s_;
+  std::size_t next_ = 0, last_ = 0;
+  std::vector<WhiskerMount> mounts_ = defaultWhiskerArray();
+};
+
+// runMapping's extent of the free-space grid (pipeline.cc): the poses' box padded by the reach.
+std::pair<Vec2, Vec2> reach(const std::vector<Pose2>& poses, const std::vector<WhiskerMount>& mounts) {
+  double rr = 0.0;
+  for (const WhiskerMount& m : mounts) rr = std::max(rr, m.base.norm() + m.length);
+  Vec2 lo = poses.front().position(), hi = lo;
+  for (const Pose2& p : poses) {
+    lo = lo.cwiseMin(p.position());
+    hi = hi.cwiseMax(p.position());
+  }
+  const Vec2 pad{rr + 0.05, rr + 0.05};
+  return {lo - pad, hi + pad};
+}
+
+bool samePose(const Pose2& a, const Pose2& b) { return a.x == b.x && a.y == b.y && a.theta == b.theta; }
+bool sameTable(const MapTable& a, const MapTable& b) {
+  return samePose(a.pose, b.pose) && a.width == b.width && a.depth == b.depth && a.leg == b.leg &&
+         a.score == b.score && a.support == b.support;
+}
+
+// Bit-for-bit equality of two maps, wall time aside.
+void requireSameMap(const Map& a, const Map& b) {
+  REQUIRE(a.tables.size() == b.tables.size());
+  for (std::size_t i = 0; i < a.tables.size(); ++i) CHECK(sameTable(a.tables[i], b.tables[i]));
+  REQUIRE(a.per_pose.size() == b.per_pose.size());
+  for (std::size_t i = 0; i < a.per_pose.size(); ++i) {
+    CHECK(samePose(a.per_pose[i].pose, b.per_pose[i].pose));
+    CHECK(a.per_pose[i].shapelets == b.per_pose[i].shapelets);
+    REQUIRE(a.per_pose[i].tables.size() == b.per_pose[i].tables.size());
+    for (std::size_t j = 0; j < a.per_pose[i].tables.size(); ++j)
+      CHECK(sameTable(a.per_pose[i].tables[j], b.per_pose[i].tables[j]));
+  }
+  REQUIRE(a.shapelets.size() == b.shapelets.size());
+  for (std::size_t i = 0; i < a.shapelets.size(); ++i) {
+    const Shapelet& x = a.shapelets[i];
+    const Shapelet& y = b.shapelets[i];
+    CHECK((x.x == y.x && x.y == y.y && x.phi == y.phi && x.tau == y.tau && x.ox == y.ox &&
+           x.oy == y.oy && x.pose_index == y.pose_index && x.whisker == y.whisker));
+  }
+  CHECK(a.stats.poses == b.stats.poses);
+  CHECK(a.stats.shapelets == b.stats.shapelets);
+  CHECK(a.stats.rejected_reports == b.stats.rejected_reports);
+  CHECK(a.stats.proposals == b.stats.proposals);
+}
+
+MappingOptions options(std::uint64_t seed, int global_sweeps) {
+  MappingOptions o;
+  o.seed = seed;
+  o.global_sweeps = global_sweeps;
+  o.global_chains = 4;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("Mapper: pose by pose gives exactly runMapping's map", "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  for (const int global : {0, 4}) {
+    for (const std::uint64_t seed : {std::uint64_t{1}, std::uint64_t{77}}) {
+      INFO("global_sweeps " << global << " seed " << seed);
+      const MappingOptions o = options(seed, global);
+      ScriptSensor sensor(script);
+      const Map expected = runMapping(sensor, script.poses, 0, o);
+      REQUIRE(expected.stats.shapelets == static_cast<int>(script.poses.size()));
+      REQUIRE_FALSE(expected.per_pose.empty());
+
+      const auto [lo, hi] = reach(script.poses, mounts);
+      Mapper mapper(mounts, lo, hi, o);
+      for (std::size_t t = 0; t < script.poses.size(); ++t) {
+        CHECK(mapper.addPose(script.poses[t], script.reports[t], script.rays[t]) == 1);
+      }
+      CHECK(mapper.poses() == static_cast<int>(script.poses.size()));
+      const Map got = mapper.finish();
+      requireSameMap(got, expected);
+      // Not an empty comparison: the clustered map has the table (deterministic for the seed).
+      if (global == 0) CHECK_FALSE(expected.tables.empty());
+    }
+  }
+}
+
+TEST_CASE("Mapper: a different seed gives a different run", "[mapping][mapper]") {
+  // The equality above is not vacuous: the sampler's draws depend on the seed.
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  auto run = [&](std::uint64_t seed) {
+    Mapper m(mounts, lo, hi, options(seed, 4));
+    for (std::size_t t = 0; t < script.poses.size(); ++t)
+      m.addPose(script.poses[t], script.reports[t], script.rays[t]);
+    return m.finish();
+  };
+  const Map a = run(1), b = run(2);
+  bool differ = a.stats.proposals != b.stats.proposals || a.tables.size() != b.tables.size();
+  for (std::size_t i = 0; !differ && i < a.tables.size(); ++i)
+    differ = !samePose(a.tables[i].pose, b.tables[i].pose);
+  for (std::size_t i = 0; !differ && i < std::min(a.per_pose.size(), b.per_pose.size()); ++i) {
+    for (std::size_t j = 0; !differ && j < std::min(a.per_pose[i].tables.size(), b.per_pose[i].tables.size()); ++j)
+      differ = !samePose(a.per_pose[i].tables[j].pose, b.per_pose[i].tables[j].pose);
+  }
+  CHECK(differ);
+}
+
+TEST_CASE("Mapper: snapshot() between poses does not change the final map", "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  const MappingOptions o = options(5, 4);
+
+  Mapper plain(mounts, lo, hi, o);
+  for (std::size_t t = 0; t < script.poses.size(); ++t)
+    plain.addPose(script.poses[t], script.reports[t], script.rays[t]);
+  const Map expected = plain.finish();
+
+  Mapper watched(mounts, lo, hi, o);
+  for (std::size_t t = 0; t < script.poses.size(); ++t) {
+    watched.addPose(script.poses[t], script.reports[t], script.rays[t]);
+    const Map snap = watched.snapshot();
+    CHECK(snap.stats.poses == static_cast<int>(t + 1));
+    CHECK(snap.stats.shapelets == static_cast<int>(t + 1));
+    CHECK(snap.per_pose.size() <= t + 1);
+    CHECK(snap.shapelets.size() == t + 1);
+    const Map again = watched.snapshot();  // and twice in a row changes nothing either
+    requireSameMap(again, snap);
+  }
+  requireSameMap(watched.finish(), expected);
+}
+
+TEST_CASE("Mapper: rejected reports are counted and never become shapelets", "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  Mapper mapper(mounts, {-1, -1}, {3, 3}, options(1, 0));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto rep = [](int w, double r, double phi) {
+    ContactReport c;
+    c.whisker = w;
+    c.r = r;
+    c.phi = phi;
+    c.robot = {1, 1, 0};
+    return c;
+  };
+  const std::vector<ContactReport> bad = {rep(0, nan, 0.1), rep(7, 0.05, 0.1), rep(-1, 0.05, 0.1),
+                                          rep(1, 1.0, 0.1), rep(2, 0.05, nan)};
+  CHECK(mapper.addPose({1, 1, 0}, bad, {}) == 0);
+  const std::vector<ContactReport> mixed = {rep(0, 0.05, 0.2), rep(9, 0.05, 0.2), rep(3, 0.1, 1.0)};
+  CHECK(mapper.addPose({1, 1, 0}, mixed, {}) == 2);
+  const Map map = mapper.finish();
+  CHECK(map.stats.rejected_reports == 6);
+  CHECK(map.stats.shapelets == 2);
+  REQUIRE(map.shapelets.size() == 2);
+  CHECK(map.shapelets[0].pose_index == 1);
+  CHECK(map.per_pose.size() == 1);  // the all-rejected pose added no MAP
+  CHECK(map.stats.poses == 2);
+}
+
+TEST_CASE("Mapper: a pose without reports adds no per-pose MAP", "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  Mapper mapper(mounts, lo, hi, options(3, 0));
+  CHECK(mapper.addPose(script.poses[0], script.reports[0], script.rays[0]) == 1);
+  CHECK(mapper.snapshot().per_pose.size() == 1);
+  // Two poses with free rays only.
+  CHECK(mapper.addPose(script.poses[1], {}, script.rays[1]) == 0);
+  CHECK(mapper.addPose(script.poses[2], {}, {}) == 0);
+  Map snap = mapper.snapshot();
+  CHECK(snap.per_pose.size() == 1);
+  CHECK(snap.stats.poses == 3);
+  CHECK(mapper.addPose(script.poses[3], script.reports[3], script.rays[3]) == 1);
+  const Map map = mapper.finish();
+  REQUIRE(map.per_pose.size() == 2);
+  CHECK(samePose(map.per_pose[0].pose, script.poses[0]));
+  CHECK(samePose(map.per_pose[1].pose, script.poses[3]));
+  CHECK(map.per_pose[1].shapelets == 1);
+  // The pose index counts every pose, empty ones included.
+  REQUIRE(map.shapelets.size() == 2);
+  CHECK(map.shapelets[0].pose_index == 0);
+  CHECK(map.shapelets[1].pose_index == 3);
+  CHECK(map.stats.poses == 4);
+}
