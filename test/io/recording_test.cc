@@ -425,7 +425,7 @@ TEST_CASE("Recording: the writer's errors name the file", "[io][recording]") {
   }
 }
 
-TEST_CASE("Recording: write() and mark() after close() are errors; close() twice is fine",
+TEST_CASE("Recording: write() and mark() after close() are errors, close() twice is fine",
           "[io][recording]") {
   TempDir dir;
   const std::string path = dir.file("closed.crec");

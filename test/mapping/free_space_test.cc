@@ -17,7 +17,7 @@ TEST_CASE("FreeSpace: a ray through a leg's core counts, one grazing its outline
   CHECK(graze.maxInSquare(leg, 0.05, 0.0) >= 1);  // the unshrunk square does see it
 }
 
-TEST_CASE("FreeSpace: each ray counts once per cell; outside the grid is zero", "[mapping]") {
+TEST_CASE("FreeSpace: each ray counts once per cell, outside the grid is zero", "[mapping]") {
   FreeSpaceGrid g({0, 0}, {1, 1}, 0.01);
   for (int i = 0; i < 3; ++i) g.addRay({{0.1, 0.1}, {0.9, 0.9}});
   CHECK(g.count({0.5, 0.5}) == 3);

@@ -112,7 +112,7 @@ TEST_CASE("MapIo: a map survives the JSON round trip", "[mapping]") {
   CHECK(back.shapelets.empty());
 }
 
-TEST_CASE("MapIo: table thetas are written in [0, pi)", "[mapping]") {
+TEST_CASE("MapIo: table thetas are written in 0 <= theta < pi", "[mapping]") {
   Map m;
   for (double theta : {-1e-17, -kPi, kPi, 2.5 * kPi, -0.3, 0.0, 3.0}) {
     m.tables.push_back(makeMapTable(1.0, 1.0, theta));

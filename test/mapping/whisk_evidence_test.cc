@@ -49,7 +49,7 @@ bool near(double a, double b, double tol = 1e-12) { return std::abs(a - b) <= to
 
 }  // namespace
 
-TEST_CASE("WhiskEvidence: halfTurn maps any angle into [0, pi)", "[mapping][evidence]") {
+TEST_CASE("WhiskEvidence: halfTurn maps any angle to 0 <= a < pi", "[mapping][evidence]") {
   CHECK(halfTurn(0.0) == 0.0);
   CHECK(near(halfTurn(kPi), 0.0));
   CHECK(near(halfTurn(-0.1), kPi - 0.1));
@@ -113,7 +113,7 @@ TEST_CASE("WhiskEvidence: each whisker reports once per whisk, from its first ep
   CHECK(rays.empty());  // no negative-evidence samples taken
 }
 
-TEST_CASE("WhiskEvidence: r is clamped to [0, the mount's length]", "[mapping][evidence]") {
+TEST_CASE("WhiskEvidence: r is clamped to 0 .. the mount's length", "[mapping][evidence]") {
   WhiskEvidence ev(mounts());
   ev.begin();
   signal::ContactEpisode ep = episode(0, 0.0);
@@ -129,7 +129,7 @@ TEST_CASE("WhiskEvidence: r is clamped to [0, the mount's length]", "[mapping][e
 }
 
 TEST_CASE("WhiskEvidence: phi is the template angle turned from the onset heading to the peak "
-          "heading, in [0, pi)",
+          "heading, 0 <= phi < pi",
           "[mapping][evidence]") {
   const auto pose_at = [](std::uint64_t i) {
     // Headings chosen per sample: onset at 1000, peaks at 1000 + peak.

@@ -80,7 +80,7 @@ std::size_t Chunk::assign(StreamId id, std::uint64_t t, std::span<const std::uin
   stream = id;
   t_ns = t;
   const std::size_t n = std::min(src.size(), kMaxChunkBytes);
-  std::memcpy(bytes.data(), src.data(), n);
+  if (n > 0) std::memcpy(bytes.data(), src.data(), n);  // an empty span's data() may be null
   size = static_cast<std::uint16_t>(n);
   return n;
 }
