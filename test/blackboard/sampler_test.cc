@@ -134,7 +134,7 @@ TEST_CASE("Sampler: finds a table from shapelets on three of its legs", "[blackb
   CHECK(found >= 16);
 }
 
-TEST_CASE("Sampler: same seed, same MAP; another seed may differ but stays valid",
+TEST_CASE("Sampler: same seed, same MAP, another seed may differ but stays valid",
           "[blackboard]") {
   auto run = [](uint64_t seed) {
     ModelParams p;

@@ -102,7 +102,7 @@ double angleDiff(double a, double b) { return std::abs(crunch::wrapPi(a - b)); }
 
 }  // namespace
 
-TEST_CASE("Robot: the virtual robot maps by touch; --replay gives the same map; a truncated "
+TEST_CASE("Robot: the virtual robot maps by touch, --replay gives the same map, a truncated "
           "recording replays up to the damage",
           "[hil]") {
   if (realHardware()) {

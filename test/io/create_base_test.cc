@@ -164,7 +164,7 @@ TEST_CASE("CreateBase: drive reaches the body with the right v and omega, clampe
   REQUIRE(pollUntil(*base, 1.0, [&] { return commanded(0.0); }));
 }
 
-TEST_CASE("CreateBase: odometry tracks the true pose over drive-turn-drive; replay identical",
+TEST_CASE("CreateBase: odometry tracks the true pose over drive-turn-drive, replay identical",
           "[io][create][pty]") {
   Robot robot;
   auto base = openBase(robot);

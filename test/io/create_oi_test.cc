@@ -266,7 +266,7 @@ TEST_CASE("OI odometry: straight lines, in-place turns and arcs against geometry
   CHECK(spin.pose().theta == Approx(0.3).margin(1e-12));
 }
 
-TEST_CASE("OI sensor tracker: chunking does not change the result; bumps tracked", "[io][create]") {
+TEST_CASE("OI sensor tracker: chunking does not change the result, bumps tracked", "[io][create]") {
   std::mt19937 rng(7);
   Bytes stream;
   for (int k = 0; k < 500; ++k) {

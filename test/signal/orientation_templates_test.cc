@@ -83,7 +83,7 @@ TEST_CASE("Orientation: 15 classes from 20 to 160 degrees", "[signal]") {
   CHECK(a[7] == Approx(0.5 * kPi));
 }
 
-TEST_CASE("Orientation: templates are class means; eq. 3 is the mean squared error", "[signal]") {
+TEST_CASE("Orientation: templates are class means, eq. 3 is the mean squared error", "[signal]") {
   const OrientationOptions o{.angles = {0.5, 1.0}};
   const std::vector<LabelledWindow> data = {{0.5, 0, constantWindow(1.0, 2)},
                                             {0.5, 1, constantWindow(3.0, 2)},

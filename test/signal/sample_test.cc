@@ -21,7 +21,7 @@ TEST_CASE("Sample: status bits agree with the firmware's definitions", "[signal]
   CHECK(status::kMlxMask == MLX_ST_DIAG_MASK);
 }
 
-TEST_CASE("Sample: only status 0 is fresh; NO_DATA outranks flags, flags outrank STALE",
+TEST_CASE("Sample: only status 0 is fresh, NO_DATA outranks flags, flags outrank STALE",
           "[signal]") {
   CHECK(classifyStatus(0) == SampleKind::kFresh);
   for (std::uint16_t bit :
