@@ -15,9 +15,10 @@
 // A whisker without an r estimate, or whose episode has no orientation (window cut short),
 // gives no report; both are counted.
 //
-// Negative evidence: the caller samples the whisk every `free_every` pipeline samples with
-// sample(pose, contact mask); a sample whose whisker shows no contact within `free_guard`
-// samples either side (the smoothing lags the physics by ~14 ms) gives that whisker's straight
+// Negative evidence: the caller samples the whisk every kFreeEvery pipeline samples with
+// sample(pose, contact mask); a sample whose whisker shows no contact within kFreeGuard
+// sample() calls either side (4 x 60 ms = +-0.24 s: far more than the smoothing's ~14 ms lag,
+// so a whisker about to touch or just released is never taken as free) gives its straight
 // rest ray.
 //
 // Allocation: begin() keeps the buffers; after the first whisks nothing is allocated.
@@ -37,7 +38,7 @@ namespace crunch {
 class WhiskEvidence {
  public:
   static constexpr int kFreeEvery = 120;  // pipeline samples between free-ray samples (60 ms)
-  static constexpr int kFreeGuard = 4;    // samples either side that must show no contact
+  static constexpr int kFreeGuard = 4;    // sample() calls either side with no contact (0.24 s)
 
   // One whisker's first-pass report of this whisk.
   struct Entry {
