@@ -61,6 +61,8 @@ Map sampleMap() {
   m.stats.rejected_reports = 5;
   m.stats.proposals = 12345678901LL;
   m.stats.wall_s = 2.75;
+  m.stats.peak_live_tables = 41;
+  m.stats.peak_live_legs = 163;
   m.shapelets.resize(3);  // for pictures only: not written
   return m;
 }
@@ -109,6 +111,8 @@ TEST_CASE("MapIo: a map survives the JSON round trip", "[mapping]") {
   CHECK(back.stats.rejected_reports == 5);
   CHECK(back.stats.proposals == 12345678901LL);
   CHECK(back.stats.wall_s == 2.75);
+  CHECK(back.stats.peak_live_tables == 41);
+  CHECK(back.stats.peak_live_legs == 163);
   CHECK(back.shapelets.empty());
 }
 
@@ -154,6 +158,27 @@ TEST_CASE("MapIo: extra keys are allowed, missing sections are empty", "[mapping
   REQUIRE(r.value().tables.size() == 1);
   CHECK(r.value().tables[0].width == crunch::kStandardTableWidth);
   CHECK(r.value().walls.empty());
+}
+
+TEST_CASE("MapIo: peak_live_tables and peak_live_legs are written and optional", "[mapping]") {
+  Map m;
+  m.stats.peak_live_tables = 7;
+  m.stats.peak_live_legs = 19;
+  const std::string text = crunch::mapToJson(m);
+  CHECK(text.find("\"peak_live_tables\": 7") != std::string::npos);
+  CHECK(text.find("\"peak_live_legs\": 19") != std::string::npos);
+  // A file from before issue 6 has neither: both read as 0.
+  const auto old = crunch::parseMapJson(
+      R"({"schema": "crunch.map/1", "stats": {"poses": 3, "wall_s": 0.5}})", "map.json");
+  REQUIRE(old.ok());
+  CHECK(old.value().stats.poses == 3);
+  CHECK(old.value().stats.peak_live_tables == 0);
+  CHECK(old.value().stats.peak_live_legs == 0);
+  // A negative count is an error naming the field.
+  const auto bad = crunch::parseMapJson(
+      R"({"schema": "crunch.map/1", "stats": {"peak_live_legs": -2}})", "map.json");
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("peak_live_legs") != std::string::npos);
 }
 
 TEST_CASE("MapIo: a bad map file is an error naming the file and the field", "[mapping]") {

@@ -262,3 +262,60 @@ TEST_CASE("Mapper: a pose without reports adds no per-pose MAP", "[mapping][mapp
   CHECK(map.shapelets[1].pose_index == 3);
   CHECK(map.stats.poses == 4);
 }
+
+TEST_CASE("Mapper: peak_live_tables and peak_live_legs track the largest annealed blackboard",
+          "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  for (const std::uint64_t seed : {std::uint64_t{1}, std::uint64_t{9}}) {
+    INFO("seed " << seed);
+    // Per-pose only: MAP_t is the live tables when the annealing ends (Sampler::mapTables), so
+    // the peak of live tables is exactly the largest per-pose MAP.
+    Mapper mapper(mounts, lo, hi, options(seed, 0));
+    CHECK(mapper.snapshot().stats.peak_live_tables == 0);  // nothing annealed yet
+    CHECK(mapper.snapshot().stats.peak_live_legs == 0);
+    int prev_tables = 0, prev_legs = 0;
+    std::size_t largest_map = 0;
+    for (std::size_t t = 0; t < script.poses.size(); ++t) {
+      mapper.addPose(script.poses[t], script.reports[t], script.rays[t]);
+      const Map snap = mapper.snapshot();
+      CHECK(snap.stats.peak_live_tables >= prev_tables);  // a running maximum
+      CHECK(snap.stats.peak_live_legs >= prev_legs);
+      prev_tables = snap.stats.peak_live_tables;
+      prev_legs = snap.stats.peak_live_legs;
+      largest_map = std::max(largest_map, snap.per_pose.back().tables.size());
+      CHECK(prev_tables == static_cast<int>(largest_map));
+    }
+    const Map per_pose = mapper.finish();
+    CHECK(per_pose.stats.peak_live_tables == prev_tables);  // no global inference: unchanged
+    CHECK(per_pose.stats.peak_live_legs == prev_legs);
+    CHECK(per_pose.stats.peak_live_tables >= 1);  // the scripted table is hypothesised
+    // A live table survives pruning only with a child near a shapelet, and legs explain the
+    // 12 shapelets: at least one leg, never more than the pool (4 per shapelet + 64 is far off).
+    CHECK(per_pose.stats.peak_live_legs >= 1);
+    CHECK(per_pose.stats.peak_live_legs <= 4 * per_pose.stats.shapelets + 64);
+
+    // With the global inference the chains count too: never below the per-pose peak.
+    Mapper global(mounts, lo, hi, options(seed, 4));
+    for (std::size_t t = 0; t < script.poses.size(); ++t)
+      global.addPose(script.poses[t], script.reports[t], script.rays[t]);
+    const Map before = global.snapshot();
+    const Map fused = global.finish();
+    CHECK(before.stats.peak_live_tables == per_pose.stats.peak_live_tables);  // same draws so far
+    CHECK(fused.stats.peak_live_tables >= before.stats.peak_live_tables);
+    CHECK(fused.stats.peak_live_legs >= before.stats.peak_live_legs);
+    // A fused table is one that half the chains hold alive at their end.
+    CHECK(fused.stats.peak_live_tables >= (fused.tables.empty() ? 0 : 1));
+  }
+}
+
+TEST_CASE("Mapper: a run without shapelets has no live hypotheses", "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  Mapper mapper(mounts, {-1, -1}, {3, 3}, options(1, 4));
+  mapper.addPose({1, 1, 0}, {}, {});
+  const Map map = mapper.finish();
+  CHECK(map.stats.peak_live_tables == 0);
+  CHECK(map.stats.peak_live_legs == 0);
+  CHECK(map.tables.empty());
+}

@@ -66,7 +66,9 @@ std::string mapToJson(const Map& map) {
                 {"shapelets", s.shapelets},
                 {"rejected_reports", s.rejected_reports},
                 {"proposals", s.proposals},
-                {"wall_s", s.wall_s}}}};
+                {"wall_s", s.wall_s},
+                {"peak_live_tables", s.peak_live_tables},
+                {"peak_live_legs", s.peak_live_legs}}}};
   return doc.dump(2) + "\n";
 }
 
@@ -175,6 +177,9 @@ Map parseMapDocument(const Json& doc) {
     s.rejected_reports = optionalCount<int>(*stats, "stats", "rejected_reports");
     s.proposals = optionalCount<long long>(*stats, "stats", "proposals");
     s.wall_s = optionalNumber(*stats, "stats", "wall_s", 0.0);
+    // Added for issue 6; absent from older files (read as 0).
+    s.peak_live_tables = optionalCount<int>(*stats, "stats", "peak_live_tables");
+    s.peak_live_legs = optionalCount<int>(*stats, "stats", "peak_live_legs");
   }
   return map;
 }

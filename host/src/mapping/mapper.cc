@@ -1,5 +1,6 @@
 #include "crunch/mapping/mapper.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace crunch {
@@ -28,6 +29,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     Sampler sampler(board, so, rng);
     sampler.anneal();
     map.stats.proposals += sampler.stats().proposals;
+    map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, board.liveTables());
+    map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, board.liveLegs());
     sampler.mapTables(found);
     for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
   }
@@ -86,6 +89,8 @@ int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,
   }
   if (fresh > 0) {
     sampler_.anneal();
+    map_.stats.peak_live_tables = std::max(map_.stats.peak_live_tables, board_.liveTables());
+    map_.stats.peak_live_legs = std::max(map_.stats.peak_live_legs, board_.liveLegs());
     sampler_.mapTables(tables_);
     PoseMap pm;
     pm.pose = pose;

@@ -39,6 +39,14 @@ struct MapStats {
   int rejected_reports = 0;  // non-finite or out-of-range reports, never entered the blackboard
   long long proposals = 0;
   double wall_s = 0.0;
+  // Model size (issue 6, "model no more than a scene needs"): the most live table / leg
+  // hypotheses the blackboard held at the end of any annealing (Blackboard::liveTables(),
+  // liveLegs(), read after Sampler::anneal() returns, i.e. after the last temperature's pruning;
+  // the count inside a temperature may be higher). The maximum over every pose's annealing
+  // (Mapper::addPose) and, when the fused map is a global inference (Mapper::finish with
+  // global_sweeps > 0), over each of its chains too. 0 for a run that never annealed.
+  int peak_live_tables = 0;
+  int peak_live_legs = 0;
 };
 
 struct Map {

@@ -47,7 +47,9 @@ class Mapper {
   // The map so far: per-pose MAPs, shapelets, and tables fused by clustering (no random draws).
   Map snapshot() const;
   // The final map: the global inference (options.global_sweeps > 0) or the clustering; stats
-  // include wall_s since construction. Call once, last.
+  // include wall_s since construction. Call once, last. stats.peak_live_tables/_legs are the
+  // maxima over every pose's annealing and, with the global inference, over its chains too
+  // (each counted when its annealing ends); snapshot() gives the per-pose maxima so far.
   Map finish();
 
   int poses() const { return pose_count_; }
