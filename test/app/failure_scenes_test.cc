@@ -1,0 +1,241 @@
+// Scenes where the methods fail (issue 6): each scene of test/scenes/ below is mapped exactly as
+// `crunchhost --sim --scene test/scenes/NAME.json --seed 1` maps it (app::runSim: the ray sensor
+// with the gaussian noise model, realistic noise, the default sampler and global inference), and
+// its accuracy (report.json), model size (map.json stats.peak_live_*) and run time are bounded.
+//
+// How the bounds were set: every number was measured first with seed 1 in a Release build on the
+// project's 2-core machine (docs/RESULTS.md, "Scenes where the methods fail", has the full table
+// and seeds 2-3 beside it). Each bound then leaves a stated margin: recall one real table below
+// the measurement (a run is deterministic for its seed, but a different compiler or build type
+// may round differently and send the sampler down another path; one table is the smallest
+// change the metric can make), precision and phantom counts a comparable step, position error
+// twice the measurement. The bounds pin today's behaviour, failures included: a scene whose
+// recall is low here is documented as a failure, not hidden, and a change that makes it worse
+// fails the test.
+//
+// Model size: a live leg survives the pruning after each temperature only near a shapelet and a
+// live table only with a child leg near one, so peak_live_legs <= shapelets and
+// peak_live_tables <= peak_live_legs bound memory by the evidence; each scene also bounds
+// peak_live_tables against its real tables (measured, x1.5). Wall time: a hang guard, about ten
+// times the Release measurement (sanitizer builds run several times slower).
+#include "sim_mode.h"
+
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "crunch/mapping/map_io.h"
+
+using namespace crunch;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Bounds {
+  double min_recall = 0.0;
+  double min_precision = 0.0;
+  int max_wall_phantoms = 0;
+  int max_other_phantoms = 0;
+  double max_position_error = 0.0;  // metres, mean over matched tables
+  int max_peak_tables = 0;          // peak_live_tables
+  double max_seconds = 0.0;         // whole runSim, hang guard
+};
+
+struct Outcome {
+  nlohmann::json report;
+  Map map;
+  double seconds = 0.0;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// `crunchhost --sim --scene test/scenes/<name>.json --seed 1 --out <tmp>`.
+Outcome runScene(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("crunch_failure_scenes_" + name);
+  fs::remove_all(dir);
+  app::SimOptions opt;
+  opt.scene_path = std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/" + name + ".json";
+  opt.seed = 1;
+  opt.out_dir = dir.string();
+  std::ostringstream out, err;
+  const auto t0 = std::chrono::steady_clock::now();
+  const int code = app::runSim(opt, out, err);
+  Outcome o;
+  o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  INFO(err.str());
+  REQUIRE(code == 0);
+  o.report = nlohmann::json::parse(slurp(dir / "report.json"));
+  auto map = parseMapJson(slurp(dir / "map.json"), (dir / "map.json").string());
+  INFO((map.ok() ? std::string() : map.error().message));
+  REQUIRE(map.ok());
+  o.map = std::move(map).value();
+  fs::remove_all(dir);
+  return o;
+}
+
+// Runs the scene and checks everything every scene must satisfy, and its own bounds.
+Outcome checkScene(const std::string& name, const Bounds& b) {
+  Outcome o = runScene(name);
+  const nlohmann::json& a = o.report.at("accuracy");
+  const nlohmann::json& c = o.report.at("counts");
+  const MapStats& s = o.map.stats;
+  const int shapelets = c.at("shapelets").get<int>();
+  INFO(name << ": " << a.dump() << " " << c.dump() << " peak_live_tables " << s.peak_live_tables
+            << " peak_live_legs " << s.peak_live_legs << " in " << o.seconds << " s");
+
+  // Finite outputs.
+  for (const char* key : {"precision", "recall", "f1", "mean_position_error_m",
+                          "mean_angle_error_rad", "per_pose_match_fraction"}) {
+    INFO(key);
+    CHECK(std::isfinite(a.at(key).get<double>()));
+  }
+  for (const MapTable& t : o.map.tables)
+    CHECK((std::isfinite(t.pose.x) && std::isfinite(t.pose.y) && std::isfinite(t.pose.theta) &&
+           std::isfinite(t.score)));
+  CHECK(std::isfinite(s.wall_s));
+  CHECK(s.shapelets == shapelets);
+  CHECK(static_cast<int>(o.map.tables.size()) == a.at("fused_tables").get<int>());
+
+  // Accuracy against the scene's own bounds.
+  CHECK(a.at("recall").get<double>() >= b.min_recall - 1e-9);
+  CHECK(a.at("precision").get<double>() >= b.min_precision - 1e-9);
+  CHECK(a.at("phantoms_near_walls").get<int>() <= b.max_wall_phantoms);
+  CHECK(a.at("phantoms_elsewhere").get<int>() <= b.max_other_phantoms);
+  CHECK(a.at("mean_position_error_m").get<double>() <= b.max_position_error);
+
+  // Model size: bounded by the evidence and by the scene.
+  CHECK(s.peak_live_legs <= shapelets);
+  CHECK(s.peak_live_tables <= s.peak_live_legs);
+  CHECK(s.peak_live_tables <= b.max_peak_tables);
+
+  CHECK(o.seconds < b.max_seconds);
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("Failure scenes: empty arena maps only wall phantoms", "[app][scenes]") {
+  // Measured (seed 1): 80 shapelets, all on the four boundary walls; 3 fused tables, every one
+  // within 0.3 m of a wall; peak 8 live tables / 53 legs. There is no WALL concept (paper §4's
+  // "perceptual relativism"), so a table whose legs stand on wall shapelets explains them better
+  // than the null prior c_S; negative evidence removes those whose other legs would stand in
+  // swept free space, and the ones left stand flush against a wall, where no whisker can sweep.
+  // Bound: nothing away from the walls, at most 6 wall phantoms (twice the measurement).
+  const Outcome o = checkScene("empty_arena", {.min_recall = 1.0,
+                             .min_precision = 0.0,
+                             .max_wall_phantoms = 6,
+                             .max_other_phantoms = 0,
+                             .max_position_error = 0.0,
+                             .max_peak_tables = 12,
+                             .max_seconds = 10.0});
+  const nlohmann::json& a = o.report.at("accuracy");
+  INFO(a.dump());
+  CHECK(a.at("true_tables").get<int>() == 0);
+  CHECK(a.at("phantoms_elsewhere").get<int>() == 0);
+  CHECK(a.at("phantoms_near_walls").get<int>() == static_cast<int>(o.map.tables.size()));
+  CHECK(o.map.tables.size() <= 6);
+}
+
+TEST_CASE("Failure scenes: tables touching each other", "[app][scenes]") {
+  // Two pairs of standard tables, one touching along the long sides, one end to end: where two
+  // tables touch, two legs stand side by side as one 0.10 x 0.05 m block, and a table straddling
+  // the pair explains the block's faces as well as either real table. Measured (seed 1): recall
+  // 0.75 (3 of 4), precision 0.6, 2 wall phantoms, 6.0 mm mean error, peak 11 tables / 75 legs,
+  // 0.87 s. Bounds: recall >= 0.5 (one table fewer), precision >= 0.4, <= 4 wall phantoms,
+  // <= 1 elsewhere, error <= 15 mm, peak tables <= 17.
+  checkScene("adjacent_tables", {.min_recall = 0.5,
+                                 .min_precision = 0.4,
+                                 .max_wall_phantoms = 4,
+                                 .max_other_phantoms = 1,
+                                 .max_position_error = 0.015,
+                                 .max_peak_tables = 17,
+                                 .max_seconds = 10.0});
+}
+
+TEST_CASE("Failure scenes: tables against a wall", "[app][scenes]") {
+  // Three tables flush against the boundary walls (one in a corner) and one free: the wall side
+  // of a flush table can never be touched, so its wall legs are sensed on one face at most, and
+  // they stand among wall shapelets. Measured (seed 1): recall 0.75 (3 of 4), precision 0.75,
+  // 1 wall phantom, 1.4 mm error, peak 12 tables / 74 legs, 0.80 s. Bounds: recall >= 0.5,
+  // precision >= 0.5, <= 3 wall phantoms, <= 1 elsewhere, error <= 10 mm, peak tables <= 18.
+  checkScene("table_at_wall", {.min_recall = 0.5,
+                               .min_precision = 0.5,
+                               .max_wall_phantoms = 3,
+                               .max_other_phantoms = 1,
+                               .max_position_error = 0.010,
+                               .max_peak_tables = 18,
+                               .max_seconds = 10.0});
+}
+
+TEST_CASE("Failure scenes: interior walls", "[app][scenes]") {
+  // Four rooms (walls with doors) and a free-standing wall segment, one table per room: the
+  // interior walls double the wall shapelets (331 against ~150 in an open arena), and every one
+  // is a place for a phantom. Measured (seed 1): recall 1.0, precision 0.5 (4 wall phantoms),
+  // 3.2 mm error, peak 13 tables / 133 legs, 1.9 s. Bounds: recall >= 0.75, precision >= 0.35,
+  // <= 7 wall phantoms, <= 1 elsewhere, error <= 10 mm, peak tables <= 20.
+  checkScene("interior_walls", {.min_recall = 0.75,
+                                .min_precision = 0.35,
+                                .max_wall_phantoms = 7,
+                                .max_other_phantoms = 1,
+                                .max_position_error = 0.010,
+                                .max_peak_tables = 20,
+                                .max_seconds = 20.0});
+}
+
+TEST_CASE("Failure scenes: a sparse pose grid", "[app][scenes]") {
+  // The default arena's six tables seen from a 5 x 5 x 4 grid (0.85 m apart) instead of
+  // 10 x 10 x 4 (0.38 m): 63 shapelets instead of ~150, and most tables are touched on one or
+  // two legs. Measured (seed 1): recall 0.33 (2 of 6), precision 1.0, no phantoms, 5.1 mm
+  // error, peak 5 tables / 43 legs, 0.26 s. Bounds: recall >= 1/6 (one table fewer), precision
+  // >= 0.5, <= 1 phantom of each kind, error <= 15 mm, peak tables <= 8.
+  checkScene("sparse_poses", {.min_recall = 1.0 / 6.0,
+                              .min_precision = 0.5,
+                              .max_wall_phantoms = 1,
+                              .max_other_phantoms = 1,
+                              .max_position_error = 0.015,
+                              .max_peak_tables = 8,
+                              .max_seconds = 10.0});
+}
+
+TEST_CASE("Failure scenes: a dense room of 12 tables", "[app][scenes]") {
+  // Twelve tables in a 5 x 5 m room, 0.2-0.4 m apart: 176 of the 576 grid poses collide with a
+  // table and are skipped, and the robot cannot pass between most tables, so their inner legs
+  // are never touched. Measured (seed 1): recall 0.42 (5 of 12), precision 1.0, no phantoms,
+  // 3.0 mm error, peak 13 tables / 89 legs, 0.85 s. Bounds: recall >= 4/12 (one table fewer),
+  // precision >= 0.75, <= 1 phantom of each kind, error <= 10 mm, peak tables <= 20.
+  checkScene("dense_room", {.min_recall = 4.0 / 12.0,
+                            .min_precision = 0.75,
+                            .max_wall_phantoms = 1,
+                            .max_other_phantoms = 1,
+                            .max_position_error = 0.010,
+                            .max_peak_tables = 20,
+                            .max_seconds = 10.0});
+}
+
+TEST_CASE("Failure scenes: a large floor, 20 x 20 m with 100 tables", "[app][scenes]") {
+  // 100 standard tables on a 2 m lattice (jittered, random angles), seen from a 52 x 52 x 4
+  // grid: the default arena's pose spacing (0.38 m), 10,816 candidate poses of which 9,468 are
+  // reachable. Measured (seed 1, Release, 2 cores): recall 0.96, precision 0.92 (8 wall
+  // phantoms), 4.4 mm error, 1,586 shapelets, peak 129 tables / 696 legs, 17.4 s. (A 40 x 40 x 4
+  // grid, 0.5 m apart, ran in 9.6 s but found only half the tables: see the sparse-grid scene.)
+  // Bounds: recall >= 0.9, precision >= 0.85, <= 14 wall phantoms, <= 3 elsewhere, error
+  // <= 10 mm, peak tables <= 1.5 x 129 = 194 (about 2 per real table), and 150 s: a hang guard
+  // for a run that takes ~17 s in Release and several times that under the sanitizers.
+  checkScene("large_floor", {.min_recall = 0.9,
+                             .min_precision = 0.85,
+                             .max_wall_phantoms = 14,
+                             .max_other_phantoms = 3,
+                             .max_position_error = 0.010,
+                             .max_peak_tables = 194,
+                             .max_seconds = 150.0});
+}
