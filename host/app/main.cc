@@ -4,6 +4,7 @@
 
 #include "robot_mode.h"
 #include "sim_mode.h"
+#include "sweep_mode.h"
 #include "train_mode.h"
 
 int main(int argc, char** argv) {
@@ -100,7 +101,46 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"max", "first"}))
       ->capture_default_str();
   train->add_flag("--json", train_opt.json_progress, "machine-readable progress on stdout");
+  // `crunchhost sweep` / `sweep-merge` (sweep_mode.h, docs/RESULTS.md "Sweeps").
+  crunch::app::SweepOptions sweep_opt;
+  auto* sweep = app.add_subcommand(
+      "sweep", "map a grid of scenes x noise x sampler budgets x seeds with the gaussian (fast, "
+               "ray-cast) sensor model, one row per run in OUT/sweep.csv and OUT/sweep.json "
+               "(docs/RESULTS.md)");
+  sweep->add_option("--scene", sweep_opt.scenes,
+                    "scene file, repeatable; the word 'default' is the built-in arena "
+                    "(default: default)");
+  sweep->add_option("--noise", sweep_opt.noise, "noise regimes, e.g. ideal,realistic,noisy");
+  sweep->add_option("--noise-scale", sweep_opt.noise_scale,
+                    "noise as multiples of realistic (sigma_r 5 mm, sigma_phi pi/32), e.g. "
+                    "0.5,1,2,5,10 (neither: realistic)");
+  sweep->add_option("--schedule-steps", sweep_opt.schedule_steps,
+                    "annealing temperatures, e.g. 4,8,16 (default 16)");
+  sweep->add_option("--sweeps", sweep_opt.sweeps, "sweeps per temperature, e.g. 1,2,4 (default 1)");
+  sweep->add_option("--working-memory", sweep_opt.working_memory,
+                    "shapelets in working memory, e.g. 7,14 (default 7)");
+  sweep->add_option("--seeds", sweep_opt.seeds, "N: seeds 1..N (default 1)");
+  sweep->add_option("--seed-list", sweep_opt.seed_list, "explicit seeds, e.g. 3,7,11");
+  sweep->add_option("--jobs", sweep_opt.jobs, "worker threads (default: one per core)");
+  sweep->add_option("--shard", sweep_opt.shard,
+                    "i/n: run only grid points with index % n == i (e.g. a Slurm array task)");
+  sweep->add_option("--out", sweep_opt.out_dir, "output directory")->capture_default_str();
+  sweep->add_flag("--json", sweep_opt.json_progress, "JSON progress lines on stdout");
+  std::vector<std::string> merge_dirs;
+  std::string merge_out = "out";
+  auto* sweep_merge = app.add_subcommand(
+      "sweep-merge", "join the sweep.csv/json of `sweep --shard` runs into one, in grid order");
+  sweep_merge->add_option("dirs", merge_dirs, "output directories of the shards")->required();
+  sweep_merge->add_option("--out", merge_out, "output directory")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  if (*sweep || *sweep_merge) {
+    if (sim || robot || !replay.empty()) {
+      std::cerr << "crunchhost: sweep is a mode of its own: drop --sim/--robot/--replay\n";
+      return 2;
+    }
+    if (*sweep_merge) return crunch::app::runSweepMerge(merge_dirs, merge_out, std::cout, std::cerr);
+    return crunch::app::runSweep(sweep_opt, std::cout, std::cerr);
+  }
   if (*train) {
     if (sim || robot) {
       std::cerr << "crunchhost: train is a mode of its own: drop --sim/--robot\n";
