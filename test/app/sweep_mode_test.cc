@@ -3,6 +3,8 @@
 // 8 x seeds 1 and 2 = 4 runs.
 #include "sweep_mode.h"
 
+#include "sim_mode.h"
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -122,12 +124,63 @@ TEST_CASE("sweep: one row per grid point in grid order, deterministic per seed",
   CHECK(stable(ja[0]) != stable(ja[1]));
 }
 
+TEST_CASE("sweep: a row measures what crunchhost --sim reports for the same point", "[app][sweep]") {
+  // The default arena (six tables, where the map is not empty) at a short schedule.
+  TempDir sw, sim;
+  app::SweepOptions o;
+  o.scenes = {"default"};
+  o.noise = "noisy";
+  o.schedule_steps = "4";
+  o.seed_list = "2";
+  o.out_dir = sw.path().string();
+  REQUIRE(sweep(o).code == 0);
+  const Json row = rows(sw.path().string()).at(0);
+  app::SimOptions so;
+  so.noise = "noisy";
+  so.seed = 2;
+  so.mapping.sampler.schedule_steps = 4;
+  so.out_dir = sim.path().string();
+  std::ostringstream out, err;
+  REQUIRE(app::runSim(so, out, err) == 0);
+  const Json report = Json::parse(slurp(sim.file("report.json")));
+  CHECK(row["scene"] == "default");
+  CHECK(row["true_tables"] == 6);
+  CHECK(row["sigma_r"] == report["noise"]["sigma_r"]);
+  CHECK(row["sigma_phi"] == report["noise"]["sigma_phi"]);
+  CHECK(row["poses"] == report["counts"]["poses"]);
+  CHECK(row["shapelets"] == report["counts"]["shapelets"]);
+  CHECK(row["proposals"] == report["counts"]["proposals"]);
+  for (const char* k : {"fused_tables", "matched", "precision", "recall", "f1"})
+    CHECK(row[k] == report["accuracy"][k]);
+  CHECK(row["mean_position_error_m"] == report["accuracy"]["mean_position_error_m"]);
+  CHECK(row["per_pose_match_fraction"] == report["accuracy"]["per_pose_match_fraction"]);
+  CHECK(row["phantoms_near_walls"] == report["accuracy"]["phantoms_near_walls"]);
+  CHECK(row["matched"].get<int>() > 0);
+}
+
 TEST_CASE("sweep: --jobs 2 gives the serial rows", "[app][sweep]") {
   TempDir serial, parallel;
   REQUIRE(sweep(tinyGrid(serial.path().string())).code == 0);
   app::SweepOptions o = tinyGrid(parallel.path().string());
   o.jobs = "2";
-  REQUIRE(sweep(o).code == 0);
+  o.json_progress = true;
+  const Run r = sweep(o);
+  REQUIRE(r.code == 0);
+  // --json: one progress line per finished run (done 1..4 whatever finished first), then done.
+  std::istringstream lines(r.out);
+  std::string line;
+  std::vector<Json> events;
+  while (std::getline(lines, line)) events.push_back(Json::parse(line));
+  REQUIRE(events.size() == 5);
+  for (size_t i = 0; i < 4; ++i) {
+    CHECK(events[i]["event"] == "progress");
+    CHECK(events[i]["done"] == i + 1);
+    CHECK(events[i]["total"] == 4);
+    CHECK(events[i].contains("eta_s"));
+  }
+  CHECK(events[4]["event"] == "done");
+  CHECK(events[4]["runs"] == 4);
+  CHECK(r.err.empty());
   CHECK(stableRows(rows(serial.path().string())) == stableRows(rows(parallel.path().string())));
 }
 
