@@ -67,7 +67,9 @@ std::string reportJson(const Scene& scene, const Map& map, const Evaluation& ev,
                  {"inferring_poses", map.per_pose.size()},
                  {"shapelets", map.stats.shapelets},
                  {"rejected_reports", map.stats.rejected_reports},
-                 {"proposals", map.stats.proposals}};
+                 {"proposals", map.stats.proposals},
+                 {"peak_live_tables", map.stats.peak_live_tables},
+                 {"peak_live_legs", map.stats.peak_live_legs}};
   j["timings_s"] = {{"sense_and_infer", map.stats.wall_s}, {"total", total_s}};
   if (physics) {
     const sim::ReportErrors& e = physics->errors;

@@ -158,6 +158,9 @@ TEST_CASE("crunchhost --sim --sensor-model physics: end to end on one table", "[
   // of the arena (the bound is loose on purpose; docs/TRAINING.md has the measured sigma).
   CHECK(ph["sigma_r_m"].get<double>() < 0.05);
   CHECK(rep["counts"]["shapelets"].get<int>() > 0);
+  // The model's size (docs/RESULTS.md): never more live legs than shapelets to explain.
+  CHECK(rep["counts"]["peak_live_legs"].get<int>() <= rep["counts"]["shapelets"].get<int>());
+  CHECK(rep["counts"]["peak_live_tables"].get<int>() <= rep["counts"]["peak_live_legs"].get<int>());
   CHECK(rep["physics"]["gaussian_same_scene"]["accuracy"].contains("recall"));
   CHECK(fs::exists(dir / "map.json"));
   CHECK(fs::exists(dir / "map.png"));
