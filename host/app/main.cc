@@ -4,6 +4,7 @@
 
 #include "robot_mode.h"
 #include "sim_mode.h"
+#include "sweep_chart.h"
 #include "sweep_mode.h"
 #include "train_mode.h"
 
@@ -132,12 +133,20 @@ int main(int argc, char** argv) {
       "sweep-merge", "join the sweep.csv/json of `sweep --shard` runs into one, in grid order");
   sweep_merge->add_option("dirs", merge_dirs, "output directories of the shards")->required();
   sweep_merge->add_option("--out", merge_out, "output directory")->capture_default_str();
+  // `crunchhost sweep-chart` (sweep_chart.h, docs/RESULTS.md "Charts").
+  crunch::app::SweepChartOptions chart_opt;
+  auto* sweep_chart = app.add_subcommand(
+      "sweep-chart", "draw a sweep's accuracy-against-cost (Pareto) and accuracy-against-noise "
+                     "charts, PNG and SVG, from DIR/sweep.json");
+  sweep_chart->add_option("--in", chart_opt.in_dir, "directory holding sweep.json")->required();
+  sweep_chart->add_option("--out", chart_opt.out_dir, "output directory (default: --in)");
   CLI11_PARSE(app, argc, argv);
-  if (*sweep || *sweep_merge) {
+  if (*sweep || *sweep_merge || *sweep_chart) {
     if (sim || robot || !replay.empty()) {
       std::cerr << "crunchhost: sweep is a mode of its own: drop --sim/--robot/--replay\n";
       return 2;
     }
+    if (*sweep_chart) return crunch::app::runSweepChart(chart_opt, std::cout, std::cerr);
     if (*sweep_merge) return crunch::app::runSweepMerge(merge_dirs, merge_out, std::cout, std::cerr);
     return crunch::app::runSweep(sweep_opt, std::cout, std::cerr);
   }

@@ -1,0 +1,32 @@
+#!/usr/bin/env bash
+# Reproduces the charts of docs/RESULTS.md "Charts" (issue 6): builds crunchhost (Release, the
+# default preset), runs two sweeps with the gaussian sensor model on the built-in arena and draws
+# them with `crunchhost sweep-chart` into docs/img/results/{budget,noise}/.
+#   (a) budget: noise realistic,noisy x schedule-steps 4,8,16 x sweeps 1,2 x working-memory 7,14
+#       x seeds 1-3 (72 runs): accuracy against cost, the Pareto front, the paper's setting.
+#   (b) noise: --noise-scale 0.5,1,2,3,5,8,12 (sigma_r 2.5 ... 60 mm) at the paper's setting x
+#       seeds 1-5 (35 runs): accuracy against noise, where mapping fails.
+# The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
+# sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+JOBS=$(nproc)
+if [[ "${1:-}" == "--jobs" ]]; then JOBS="$2"; fi
+
+cmake --preset default >/dev/null
+cmake --build build/default --target crunchhost
+BIN=build/default/host/app/crunchhost
+RAW=build/results
+IMG=docs/img/results
+mkdir -p "$RAW" "$IMG"
+
+start=$(date +%s)
+"$BIN" sweep --noise realistic,noisy --schedule-steps 4,8,16 --sweeps 1,2 --working-memory 7,14 \
+    --seeds 3 --jobs "$JOBS" --out "$RAW/budget"
+"$BIN" sweep-chart --in "$RAW/budget" --out "$IMG/budget"
+cp "$RAW/budget/sweep.csv" "$IMG/budget/sweep.csv"
+
+"$BIN" sweep --noise-scale 0.5,1,2,3,5,8,12 --seeds 5 --jobs "$JOBS" --out "$RAW/noise"
+"$BIN" sweep-chart --in "$RAW/noise" --out "$IMG/noise"
+cp "$RAW/noise/sweep.csv" "$IMG/noise/sweep.csv"
+echo "make-results: sweeps and charts in $(( $(date +%s) - start )) s; charts in $IMG/"
