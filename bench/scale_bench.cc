@@ -4,9 +4,9 @@
 //
 // One point = one N, measured in a fresh child process (this program re-executed with
 // --point N) so that its peak resident set is its own:
-//   - a synthetic floor of ceil(N / 80) tables with random orientations on a square grid 2 m
+//   - a synthetic floor of ceil(N / 8K) tables (K = 10 shapelets per face by default) with random orientations on a square grid 2 m
 //     apart (the floor grows with N at constant table density); each table is sensed on the two
-//     outward faces of each of its four legs, ~10 shapelets per face, N shapelets in all. A
+//     outward faces of each of its four legs, K shapelets per face, N shapelets in all. A
 //     shapelet lies at a uniform place along its face, displaced along the face normal by
 //     N(0, 5 mm) (sigma_r) with its orientation perturbed by N(0, pi/32) (sigma_phi), sensed
 //     from 0.1 m outside the face;
@@ -26,8 +26,9 @@
 // The baseline of the same run: N = 100 measured first and again last (drift check on a busy
 // machine); the two must agree for the curve between them to be trusted.
 //
-// Usage: scale_bench [--max N] [--seed S] [--chart PREFIX]
+// Usage: scale_bench [--max N] [--seed S] [--per-face K] [--chart PREFIX]
 //   --max N        largest N of the list 1e2, 3e2, ..., 1e5 to run (default 100000)
+//   --per-face K   shapelets per sensed leg face (default 10): the local density of evidence
 //   --chart PREFIX writes PREFIX.png (ns per proposal against log10 N) and PREFIX_memory.png
 //                  (resident bytes per shapelet against log10 N)
 //   --point N      (internal) measure one point and print it as one line
@@ -72,14 +73,14 @@ using crunch::Shapelet;
 using crunch::Vec2;
 
 constexpr double kSpacing = 2.0;         // metres between table centres
-constexpr int kPerFace = 10;             // shapelets per sensed leg face
-constexpr int kPerTable = 8 * kPerFace;  // two outward faces on each of four legs
+int g_per_face = 10;  // shapelets per sensed leg face (--per-face); 8 faces per table
 constexpr double kSigmaR = 0.005;
 constexpr double kSigmaPhi = crunch::kPi / 32;
 constexpr long long kWorkPerPoint = 30000;  // shapelets' worth of anneals per point
 
 std::vector<Shapelet> floorShapelets(int n, const ModelParams& p, Rng& rng, int* n_tables) {
-  const int tables = (n + kPerTable - 1) / kPerTable;
+  const int per_table = 8 * g_per_face;
+  const int tables = (n + per_table - 1) / per_table;
   const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(tables))));
   *n_tables = tables;
   std::vector<Shapelet> out;
@@ -87,9 +88,9 @@ std::vector<Shapelet> floorShapelets(int n, const ModelParams& p, Rng& rng, int*
   for (int k = 0; k < tables && static_cast<int>(out.size()) < n; ++k) {
     const Pose2 t{1.0 + kSpacing * (k % side), 1.0 + kSpacing * (k / side),
                   rng.uniform(0.0, crunch::kPi)};
-    for (int i = 0; i < kPerTable && static_cast<int>(out.size()) < n; ++i) {
-      const int corner = i / (2 * kPerFace);
-      const bool x_face = (i / kPerFace) % 2 == 0;
+    for (int i = 0; i < per_table && static_cast<int>(out.size()) < n; ++i) {
+      const int corner = i / (2 * g_per_face);
+      const bool x_face = (i / g_per_face) % 2 == 0;
       const int face = x_face ? ((corner == 0 || corner == 3) ? 0 : 2) : (corner < 2 ? 1 : 3);
       const Pose2 leg = crunch::testing::LegOf(t, p, corner);
       const double along = rng.uniform(-0.5, 0.5) * p.leg_side;
@@ -173,9 +174,11 @@ bool measure(const char* self, int n, uint64_t seed, Point* out) {
   posix_spawn_file_actions_adddup2(&fa, fds[1], STDOUT_FILENO);
   posix_spawn_file_actions_addclose(&fa, fds[0]);
   const std::string n_s = std::to_string(n), seed_s = std::to_string(seed);
-  std::string a0 = self, a1 = "--point", a3 = "--seed";
+  const std::string pf_s = std::to_string(g_per_face);
+  std::string a0 = self, a1 = "--point", a3 = "--seed", a5 = "--per-face";
   char* argv[] = {a0.data(), a1.data(), const_cast<char*>(n_s.c_str()), a3.data(),
-                  const_cast<char*>(seed_s.c_str()), nullptr};
+                  const_cast<char*>(seed_s.c_str()), a5.data(), const_cast<char*>(pf_s.c_str()),
+                  nullptr};
   pid_t pid = 0;
   const auto t0 = std::chrono::steady_clock::now();
   const int rc = posix_spawn(&pid, self, &fa, nullptr, argv, environ);
@@ -288,10 +291,15 @@ int main(int argc, char** argv) {
     else if (a == "--point" && has) point = std::atoi(argv[++i]);
     else if (a == "--seed" && has) seed = std::strtoull(argv[++i], nullptr, 10);
     else if (a == "--chart" && has) chart = argv[++i];
+    else if (a == "--per-face" && has) g_per_face = std::atoi(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: scale_bench [--max N] [--seed S] [--chart PREFIX]\n");
+      std::fprintf(stderr, "usage: scale_bench [--max N] [--seed S] [--per-face K] [--chart PREFIX]\n");
       return 2;
     }
+  }
+  if (g_per_face < 1 || g_per_face > 1000) {
+    std::fprintf(stderr, "scale_bench: --per-face must be in [1, 1000]\n");
+    return 2;
   }
   if (point > 0) return runPoint(point, seed);
   if (max_n < 100) {
