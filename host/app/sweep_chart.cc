@@ -66,7 +66,7 @@ Chart paretoChart(const std::vector<SettingSummary>& set, bool proposals, const 
                   const std::vector<size_t>& front) {
   Chart c;
   const double sigma_mm = set.front().sigma_r * 1e3;
-  c.options.title = "Accuracy against cost: " + noise + " noise (sigma_r " +
+  c.options.title = "Accuracy against cost: noise '" + noise + "' (sigma_r " +
                     fmt("%g", sigma_mm) + " mm), " + set.front().scene + " scene, mean of " +
                     std::to_string(set.front().runs) + " seeds";
   c.options.x_label = proposals ? "Metropolis-Hastings proposals per run (thousands, mean)"
@@ -164,6 +164,8 @@ Chart paretoChart(const std::vector<SettingSummary>& set, bool proposals, const 
   return c;
 }
 
+constexpr double kNoiseYMax = 1.35;
+
 Chart noiseChart(const std::vector<SettingSummary>& by_sigma) {
   Chart c;
   const SettingSummary& f = by_sigma.front();
@@ -174,7 +176,7 @@ Chart noiseChart(const std::vector<SettingSummary>& by_sigma) {
   c.options.width_px = 1000;
   c.options.height_px = 640;
   c.options.y_min = 0.0;
-  c.options.y_max = 1.05;
+  c.options.y_max = kNoiseYMax;  // room above 1 for the legend
   c.options.x_min = 0.0;
   c.options.legend = LegendPosition::kTopRight;
   ChartSeries recall, f1, precision;
@@ -208,7 +210,7 @@ Chart noiseChart(const std::vector<SettingSummary>& by_sigma) {
     v.dashed = true;
     v.line_width = 1.5;
     v.x = {x, x};
-    v.y = {0.0, 1.05};
+    v.y = {0.0, kNoiseYMax};
     return v;
   };
   c.series.push_back(vline("paper's \"realistic\" (5 mm, pi/32)", kPaperRealisticSigmaR * 1e3,
