@@ -52,12 +52,7 @@
 #include "crunch/blackboard/params.h"
 #include "crunch/blackboard/sampler.h"
 #include "crunch/core/rng.h"
-// chart.h's LegendPosition::kNone shadows blackboard/hypotheses.h's crunch::kNone under
-// -Wshadow (GCC flags enumerators of a scoped enum too); the two never meet in this file.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wshadow"
 #include "crunch/render/chart.h"
-#pragma GCC diagnostic pop
 
 extern char** environ;
 

@@ -6,6 +6,8 @@
 #       x seeds 1-3 (72 runs): accuracy against cost, the Pareto front, the paper's setting.
 #   (b) noise: --noise-scale 0.5,1,2,3,5,8,12 (sigma_r 2.5 ... 60 mm) at the paper's setting x
 #       seeds 1-5 (35 runs): accuracy against noise, where mapping fails.
+#   (c) scale: bench/scale_bench, cost per proposal and memory against 1e2 .. 1e5 shapelets
+#       (docs/RESULTS.md "Scale"; about 2 min), charts docs/img/results/scale*.png.
 # The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
 # sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N]
 set -euo pipefail
@@ -14,7 +16,7 @@ JOBS=$(nproc)
 if [[ "${1:-}" == "--jobs" ]]; then JOBS="$2"; fi
 
 cmake --preset default >/dev/null
-cmake --build build/default --target crunchhost
+cmake --build build/default --target crunchhost scale_bench
 BIN=build/default/host/app/crunchhost
 RAW=build/results
 IMG=docs/img/results
@@ -29,4 +31,5 @@ cp "$RAW/budget/sweep.csv" "$IMG/budget/sweep.csv"
 "$BIN" sweep --noise-scale 0.5,1,2,3,5,8,12 --seeds 5 --jobs "$JOBS" --out "$RAW/noise"
 "$BIN" sweep-chart --in "$RAW/noise" --out "$IMG/noise"
 cp "$RAW/noise/sweep.csv" "$IMG/noise/sweep.csv"
-echo "make-results: sweeps and charts in $(( $(date +%s) - start )) s; charts in $IMG/"
+build/default/bench/scale_bench --chart "$IMG/scale"
+echo "make-results: sweeps, scale and charts in $(( $(date +%s) - start )) s; charts in $IMG/"

@@ -390,7 +390,7 @@ void drawSeries(cairo_t* cr, const ChartSeries& s, const ChartColour& c, const C
 
 void drawLegend(cairo_t* cr, const Chart& chart, const ChartLayout& l) {
   const LegendPosition pos = chart.options.legend;
-  if (pos == LegendPosition::kNone) return;
+  if (pos == LegendPosition::kHidden) return;
   font(cr, kLabelFont, false);
   double widest = 0.0;
   int rows = 0;

@@ -49,7 +49,7 @@ struct ChartSeries {
   bool dashed = false;
 };
 
-enum class LegendPosition { kNone, kTopLeft, kTopRight, kBottomLeft, kBottomRight };
+enum class LegendPosition { kHidden, kTopLeft, kTopRight, kBottomLeft, kBottomRight };
 
 struct ChartOptions {
   std::string title;    // above the plot; may be empty
