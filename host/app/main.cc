@@ -64,6 +64,10 @@ int main(int argc, char** argv) {
   app.add_option("--seed", opt.seed, "seed of every random choice")->capture_default_str();
   app.add_option("--out", opt.out_dir, "output directory")->capture_default_str();
   app.add_flag("--json", opt.json_progress, "machine-readable progress on stdout");
+  app.add_option("--snapshot", opt.snapshot_pose,
+                 "also write OUT/snapshot_K.{png,svg}: the blackboard after the annealing of "
+                 "pose K (0-based, in the run's order of reachable poses), like the paper's "
+                 "Figs. 3-4");
   auto& s = opt.mapping.sampler;
   app.add_option("--schedule-steps", s.schedule_steps, "annealing temperatures")
       ->capture_default_str();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <functional>
 #include <nlohmann/json.hpp>
@@ -198,6 +199,12 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     }
     physics_sensor = std::move(created).value();
   }
+  if (opt.snapshot_pose &&
+      (*opt.snapshot_pose < 0 || *opt.snapshot_pose >= static_cast<int>(poses.size()))) {
+    err << "crunchhost: --snapshot " << *opt.snapshot_pose << ": no such pose; the run has "
+        << poses.size() << " reachable poses, numbered 0 to " << int(poses.size()) - 1 << "\n";
+    return 2;
+  }
   SensorModel& sensor = physics ? static_cast<SensorModel&>(*physics_sensor) : ray_sensor;
   MappingOptions mopt = opt.mapping;
   mopt.seed = opt.seed;
@@ -206,6 +213,44 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   mopt.model.sigma_theta_shapelet = std::max(mopt.model.sigma_theta_shapelet, noise->sigma_phi);
   ProgressBar bar(opt.json_progress ? out : err, opt.json_progress);
   mopt.progress = [&](int done, int total) { bar(done, total); };
+  std::optional<BlackboardSnapshot> snap;
+  if (opt.snapshot_pose) {
+    // Copies the blackboard once, at pose K only.
+    const int k = *opt.snapshot_pose;
+    const SamplerOptions& so = mopt.sampler;
+    mopt.after_pose = [&snap, k, &so](int t, const Pose2& pose, bool annealed,
+                                      const Blackboard& board) {
+      if (t != k) return;
+      BlackboardSnapshot s;
+      s.pose_index = t;
+      s.robot = pose;
+      s.whiskers = defaultWhiskerArray();
+      const ModelParams& m = board.params();
+      s.table_width = m.table_width;
+      s.table_depth = m.table_depth;
+      s.leg_side = m.leg_side;
+      for (int slot = 0; slot < board.workingMemoryCapacity(); ++slot)
+        if (board.slotUsed(slot)) s.shapelets.push_back(board.shapelet(slot));
+      // After annealing the live tables are MAP_t (eq. 27, Sampler::mapTables).
+      for (int32_t id = 0; id < board.tableExtent(); ++id)
+        if (board.table(id).alive) s.tables.push_back({board.table(id).pose, true});
+      for (int32_t id = 0; id < board.legExtent(); ++id) {
+        const LegHyp& l = board.leg(id);
+        if (!l.alive) continue;
+        const bool in_table = l.parent != kNone && board.table(l.parent).alive;
+        s.legs.push_back({l.pose, l.side, in_table});
+      }
+      char buf[200];
+      std::snprintf(buf, sizeof buf,
+                    "pose %d (%.2f, %.2f, %.0f deg), %s at T = exp(-%.1f), coldest of %d, "
+                    "%d sweep(s) each |",
+                    t, pose.x, pose.y, pose.theta * 180.0 / kPi,
+                    annealed ? "annealed" : "no new shapelet; as last annealed",
+                    so.schedule_log_top, so.schedule_steps, so.sweeps_per_temperature);
+      s.title = buf;
+      snap = std::move(s);
+    };
+  }
   const Map map = runMapping(sensor, poses, skipped, mopt);
   const Evaluation ev = evaluate(map, scene);
   std::optional<PhysicsSummary> physics_summary;
@@ -217,6 +262,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     sim::RaySensorModel reference(*world, defaultWhiskerArray(), NoiseRegime::realistic(), {});
     MappingOptions ref_opt = mopt;
     ref_opt.progress = nullptr;
+    ref_opt.after_pose = nullptr;
     const Map ref_map = runMapping(reference, poses, skipped, ref_opt);
     ps.gaussian = evaluate(ref_map, scene);
     ps.gaussian_s = ref_map.stats.wall_s;
@@ -241,6 +287,12 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
         return writeFileAtomic(dir + "report.json",
                                reportJson(scene, map, ev, opt, mopt.model, *noise, total_s,
                                           physics_summary));
+      },
+      [&]() -> Status {
+        if (!snap) return okStatus();
+        const std::string base = dir + "snapshot_" + std::to_string(snap->pose_index);
+        if (Status st = renderSnapshotPng(*snap, scene, base + ".png"); !st) return st;
+        return renderSnapshotSvg(*snap, scene, base + ".svg");
       }};
   for (const auto& write : writes) {
     if (const Status status = write(); !status) {
@@ -260,6 +312,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
         << " elsewhere), mean error " << ev.mean_position_error << " m / "
         << ev.mean_angle_error * 180.0 / kPi << " deg\n"
         << "inference " << map.stats.wall_s << " s; wrote " << dir << "{map.json,map.png,report.json}\n";
+    if (snap) out << "wrote " << dir << "snapshot_" << snap->pose_index << ".{png,svg}\n";
   }
   return 0;
 }

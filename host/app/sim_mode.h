@@ -23,6 +23,12 @@ struct SimOptions {
   std::string models_path;
   bool json_progress = false;  // one JSON object per line on stdout instead of a progress bar
   MappingOptions mapping;
+  // --snapshot K: also write OUT/snapshot_K.png and .svg, the blackboard (paper Figs. 3-4) after
+  // the annealing of pose K, K the 0-based index in the run's order of reachable poses (the
+  // scene's pose list without the unreachable ones; K < the "poses" count of report.json). A
+  // pose that sensed nothing new does not anneal: its snapshot shows the blackboard as the last
+  // annealing left it, with the robot at pose K. Out of range: exit 2, nothing written.
+  std::optional<int> snapshot_pose;
 };
 
 // Exit codes: 0 success; 2 bad input (scene, option) with nothing written; 1 failure to write.

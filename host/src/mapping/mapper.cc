@@ -98,6 +98,7 @@ int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,
     for (const Pose2& p : tables_) pm.tables.push_back(modelTable(p, options_.model));
     map_.per_pose.push_back(std::move(pm));
   }
+  if (options_.after_pose) options_.after_pose(t, pose, fresh > 0, board_);
   return fresh;
 }
 

@@ -475,6 +475,158 @@ void drawPicture(cairo_t* cr, const MapCanvas& canvas, const Map& map, const Sce
   drawLegend(p, options);
 }
 
+// ---- Blackboard snapshot layers (Figs. 3-4) ------------------------------------------------------
+
+constexpr Rgb kSnapTable{0.80, 0.0, 0.60};   // magenta wire-frame tables
+constexpr Rgb kSnapLeg{0.0, 0.55, 0.15};     // green wire-frame legs
+constexpr Rgb kSnapRobot{0.45, 0.45, 0.45};  // robot body
+constexpr Rgb kSnapWhisker{0.0, 0.45, 0.55};
+constexpr double kSnapFaint = 0.35;  // alpha of the truth and walls under a snapshot
+
+void drawSnapshotLayers(const Painter& p, const BlackboardSnapshot& snap) {
+  cairo_t* cr = p.cr();
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_ROUND);
+  // Tables: non-MAP thin first, MAP bold on top.
+  for (int bold = 0; bold < 2; ++bold) {
+    p.colour(kSnapTable, bold ? 1.0 : 0.55);
+    cairo_set_line_width(cr, bold ? 3.0 : 1.0);
+    for (const SnapshotTable& t : snap.tables) {
+      if (t.map != (bold == 1)) continue;
+      const TableSpec spec{t.pose, snap.table_width, snap.table_depth, snap.leg_side};
+      p.rectPath(spec.top());
+      for (const OrientedRect& leg : spec.legs()) p.rectPath(leg);
+      // A tick from the centre along the table's +x shows its orientation.
+      const Vec2 centre = t.pose.position();
+      const Vec2 dir{std::cos(t.pose.theta), std::sin(t.pose.theta)};
+      const Vec2 tick = centre + 0.15 * dir;
+      p.moveTo(centre);
+      p.lineTo(tick);
+    }
+    cairo_stroke(cr);
+  }
+  for (int bold = 0; bold < 2; ++bold) {
+    p.colour(kSnapLeg, bold ? 1.0 : 0.75);
+    cairo_set_line_width(cr, bold ? 2.5 : 1.0);
+    for (const SnapshotLeg& l : snap.legs) {
+      if (l.map != (bold == 1)) continue;
+      p.rectPath({l.pose, l.side, l.side});
+    }
+    cairo_stroke(cr);
+  }
+  cairo_set_line_join(cr, CAIRO_LINE_JOIN_MITER);
+  // The robot: body circle, heading line, whiskers from base along bearing for length.
+  const Pose2& r = snap.robot;
+  p.dotPath(r.position(), kRobotRadius * p.canvas().ppm());
+  p.colour(kSnapRobot, 0.25);
+  cairo_fill_preserve(cr);
+  p.colour(kSnapRobot);
+  cairo_set_line_width(cr, 1.5);
+  cairo_stroke(cr);
+  const Vec2 centre = r.position();
+  const Vec2 heading{std::cos(r.theta), std::sin(r.theta)};
+  const Vec2 nose = centre + kRobotRadius * heading;
+  p.moveTo(centre);
+  p.lineTo(nose);
+  cairo_set_line_width(cr, 2.0);
+  cairo_stroke(cr);
+  const double cth = std::cos(r.theta), sth = std::sin(r.theta);
+  const auto toWorld = [&](const Vec2& v) -> Vec2 {
+    return Vec2{centre.x() + cth * v.x() - sth * v.y(), centre.y() + sth * v.x() + cth * v.y()};
+  };
+  p.colour(kSnapWhisker);
+  cairo_set_line_width(cr, 1.5);
+  for (const WhiskerMount& w : snap.whiskers) {
+    const Vec2 tip{w.base.x() + w.length * std::cos(w.bearing),
+                   w.base.y() + w.length * std::sin(w.bearing)};
+    p.moveTo(toWorld(w.base));
+    p.lineTo(toWorld(tip));
+  }
+  cairo_stroke(cr);
+  // Shapelets on top: the evidence.
+  p.colour(kShapeletLine);
+  cairo_set_line_width(cr, 3.0);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
+  for (const Shapelet& s : snap.shapelets) {
+    const double hx = 0.5 * kShapeletLength * std::cos(s.phi);
+    const double hy = 0.5 * kShapeletLength * std::sin(s.phi);
+    p.moveTo(Vec2{s.x - hx, s.y - hy});
+    p.lineTo(Vec2{s.x + hx, s.y + hy});
+  }
+  cairo_stroke(cr);
+  cairo_set_line_cap(cr, CAIRO_LINE_CAP_BUTT);
+}
+
+void drawSnapshotLegend(const Painter& p) {
+  cairo_t* cr = p.cr();
+  const double x0 = MapCanvas::kMarginLeft + p.canvas().arenaWidthPx() + 18.0;
+  const double row = 24.0, icon_w = 30.0, icon_h = 14.0;
+  double y = MapCanvas::kMarginTop + 6.0;
+  const auto label = [&](const char* text) {
+    setFont(p, kLabelFontPx, false);
+    p.colour(kText);
+    drawText(p, x0 + icon_w + 10.0, y + 0.5 * icon_h + 0.35 * kLabelFontPx, text, Align::kLeft);
+    y += row;
+  };
+  const auto box = [&](const Rgb& c, double width, double inset) {
+    cairo_rectangle(cr, x0 + inset, y + inset, icon_w - 2 * inset, icon_h - 2 * inset);
+    p.colour(c);
+    cairo_set_line_width(cr, width);
+    cairo_stroke(cr);
+  };
+  cairo_rectangle(cr, x0, y, icon_w, icon_h);
+  p.colour(kTruthTop, kSnapFaint);
+  cairo_fill(cr);
+  label("ground truth (faint)");
+  box(kSnapTable, 3.0, 1.5);
+  label("table hyp., MAP");
+  box(kSnapTable, 1.0, 0.5);
+  label("table hyp., other");
+  box(kSnapLeg, 2.5, 3.0);
+  label("leg hyp., in a table");
+  box(kSnapLeg, 1.0, 3.0);
+  label("leg hyp., orphan");
+  p.colour(kShapeletLine);
+  cairo_set_line_width(cr, 3.0);
+  cairo_move_to(cr, x0 + 9.0, y + 0.5 * icon_h + 3.0);
+  cairo_line_to(cr, x0 + 21.0, y + 0.5 * icon_h - 3.0);
+  cairo_stroke(cr);
+  label("shapelets (memory)");
+  cairo_arc(cr, x0 + 0.5 * icon_w, y + 0.5 * icon_h, 7.0, 0.0, 2.0 * kPi);
+  p.colour(kSnapRobot, 0.25);
+  cairo_fill(cr);
+  p.colour(kSnapWhisker);
+  cairo_move_to(cr, x0 + 0.5 * icon_w + 7.0, y + 0.5 * icon_h);
+  cairo_line_to(cr, x0 + icon_w + 4.0, y + 0.5 * icon_h);
+  cairo_stroke(cr);
+  label("robot, whiskers");
+}
+
+void drawSnapshot(cairo_t* cr, const MapCanvas& canvas, const BlackboardSnapshot& snap,
+                  const Scene& truth) {
+  const Painter p(cr, canvas);
+  drawBackground(p);
+  drawGrid(p);
+  // The truth faint: drawn opaque into a group, painted with alpha.
+  cairo_push_group(cr);
+  drawTruthTables(p, truth);
+  drawWalls(p, truth);
+  cairo_pop_group_to_source(cr);
+  cairo_paint_with_alpha(cr, kSnapFaint);
+  p.clipToArena();
+  drawSnapshotLayers(p, snap);
+  p.restore();
+  drawAxes(p);
+  int map_tables = 0, map_legs = 0;
+  for (const SnapshotTable& t : snap.tables) map_tables += t.map;
+  for (const SnapshotLeg& l : snap.legs) map_legs += l.map;
+  std::string line = snap.title.empty() ? std::string() : snap.title + "   ";
+  line += std::to_string(snap.tables.size()) + " tables (" + std::to_string(map_tables) +
+          " MAP) | " + std::to_string(snap.legs.size()) + " legs (" + std::to_string(map_legs) +
+          " in tables) | " + std::to_string(snap.shapelets.size()) + " shapelets";
+  drawTitle(p, line);
+  drawSnapshotLegend(p);
+}
+
 Error cairoError(const std::string& path, cairo_status_t status) {
   return pictureError(path, cairo_status_to_string(status));
 }
@@ -529,6 +681,60 @@ Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
     }
   }
   cairo_surface_finish(surface.get());  // writes the document and closes the temp file
+  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  return file.value().commit();
+}
+
+Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth,
+                         const std::string& path, double pixels_per_metre) {
+  RenderOptions options;
+  options.pixels_per_metre = pixels_per_metre;
+  if (Status s = checkInputs(truth, path, options); !s) return s;
+  const MapCanvas canvas(truth.width, truth.depth, pixels_per_metre);
+  SurfacePtr surface = makeImageSurface(canvas.widthPx(), canvas.heightPx());
+  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  {
+    ContextPtr cr = makeContext(surface.get());
+    drawSnapshot(cr.get(), canvas, snap, truth);
+    if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
+      return cairoError(path, st);
+    }
+  }
+  cairo_surface_flush(surface.get());
+  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
+  if (!file) return file.error();
+  if (cairo_status_t st =
+          cairo_surface_write_to_png(surface.get(), file.value().tempPath().c_str());
+      st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  return file.value().commit();
+}
+
+Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
+                         const std::string& path, double pixels_per_metre) {
+  RenderOptions options;
+  options.pixels_per_metre = pixels_per_metre;
+  if (Status s = checkInputs(truth, path, options); !s) return s;
+  const MapCanvas canvas(truth.width, truth.depth, pixels_per_metre);
+  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
+  if (!file) return file.error();
+  SurfacePtr surface = makeSvgSurface(file.value().tempPath(), canvas.widthPx(), canvas.heightPx());
+  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
+    return cairoError(path, st);
+  }
+  {
+    ContextPtr cr = makeContext(surface.get());
+    drawSnapshot(cr.get(), canvas, snap, truth);
+    if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
+      return cairoError(path, st);
+    }
+  }
+  cairo_surface_finish(surface.get());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }

@@ -40,7 +40,7 @@ class Mapper {
   // One pose (one body whisk): its reports and the rays its whiskers swept without touching.
   // Reports that toShapelet() rejects are counted in stats().rejected_reports. If at least one
   // shapelet is new, anneals and appends MAP_t to per_pose with `pose`. Returns the shapelets
-  // added.
+  // added. Then calls options.after_pose, if set, with const access to the blackboard.
   int addPose(const Pose2& pose, std::span<const ContactReport> reports,
               std::span<const FreeRay> free_rays);
 

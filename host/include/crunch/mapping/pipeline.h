@@ -30,6 +30,12 @@ struct MappingOptions {
   bool negative_evidence = true;
   // Called after each pose with (poses done, poses total); may be empty.
   std::function<void(int, int)> progress;
+  // Blackboard snapshots (`crunchhost --sim --snapshot K`, paper Figs. 3-4): called by
+  // Mapper::addPose after every pose, with the pose's index in the run's order (0-based), the
+  // pose, whether it annealed (false: no new shapelet, the blackboard is as the last annealing
+  // left it) and const access to the blackboard at the end of that annealing (its coldest
+  // temperature, so its live tables are MAP_t). Empty by default: nothing is called or copied.
+  std::function<void(int, const Pose2&, bool, const Blackboard&)> after_pose;
 };
 
 // Maps the world seen through `sensor` from `poses` (already filtered for reachability;

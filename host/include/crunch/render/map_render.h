@@ -14,6 +14,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
@@ -69,5 +70,40 @@ Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
 // The same picture as an SVG document (units: points, one per PNG pixel).
 Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
                     const RenderOptions& options = {});
+
+// ---- Blackboard snapshots (paper Figs. 3 and 4) -------------------------------------------------
+// The blackboard at one pose: every live table hypothesis as a wire-frame rectangle (its top and
+// four legs, magenta), every live leg hypothesis as a wire-frame square (green), the shapelets of
+// working memory (orange 4 cm strokes along phi), the robot (a grey circle of kRobotRadius with a
+// heading line) and its whiskers (base + bearing + length, dark cyan), over the arena walls and
+// the true tables drawn faint. "MAP" hypotheses are drawn bold: tables flagged `map` and legs
+// flagged `map` (the caller decides; crunchhost marks the live tables after annealing, which are
+// MAP_t of eq. 27, and the legs attached to one of them). Plain data so the renderer does not
+// depend on the blackboard.
+struct SnapshotTable {
+  Pose2 pose;
+  bool map = false;
+};
+struct SnapshotLeg {
+  Pose2 pose;
+  double side = 0.05;
+  bool map = false;
+};
+struct BlackboardSnapshot {
+  int pose_index = -1;
+  Pose2 robot;
+  std::vector<WhiskerMount> whiskers;  // in the robot frame
+  std::vector<Shapelet> shapelets;     // working memory
+  std::vector<SnapshotTable> tables;   // live table hypotheses
+  std::vector<SnapshotLeg> legs;       // live leg hypotheses
+  double table_width = 0.8, table_depth = 0.8, leg_side = 0.05;  // the model's sizes, metres
+  std::string title;  // shown before the counts (pose, temperature note)
+};
+
+// Renders `snap` over `truth` as a PNG / SVG at `path`; errors and atomicity as renderMapPng.
+Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth,
+                         const std::string& path, double pixels_per_metre = 200);
+Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
+                         const std::string& path, double pixels_per_metre = 200);
 
 }  // namespace crunch
