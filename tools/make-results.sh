@@ -8,6 +8,7 @@
 #       seeds 1-5 (35 runs): accuracy against noise, where mapping fails.
 #   (c) scale: bench/scale_bench, cost per proposal and memory against 1e2 .. 1e5 shapelets
 #       (docs/RESULTS.md "Scale"; about 2 min), charts docs/img/results/scale*.png.
+#   (d) blackboard snapshots at pose 120 of the default arena, cold and hot.
 # The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
 # sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N]
 set -euo pipefail
@@ -32,4 +33,10 @@ cp "$RAW/budget/sweep.csv" "$IMG/budget/sweep.csv"
 "$BIN" sweep-chart --in "$RAW/noise" --out "$IMG/noise"
 cp "$RAW/noise/sweep.csv" "$IMG/noise/sweep.csv"
 build/default/bench/scale_bench --chart "$IMG/scale"
+# (d) blackboard snapshots (paper Figs. 3-4): pose 120 of the default arena, at the end of its
+#     annealing and after its hottest temperature.
+"$BIN" --sim --snapshot 120 --out "$RAW/snap_cold" >/dev/null
+cp "$RAW/snap_cold/snapshot_120.png" "$IMG/snapshot_default_120.png"
+"$BIN" --sim --snapshot 120 --snapshot-temperature 0 --out "$RAW/snap_hot" >/dev/null
+cp "$RAW/snap_hot/snapshot_120.png" "$IMG/snapshot_default_120_hot.png"
 echo "make-results: sweeps, scale and charts in $(( $(date +%s) - start )) s; charts in $IMG/"

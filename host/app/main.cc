@@ -68,6 +68,9 @@ int main(int argc, char** argv) {
                  "also write OUT/snapshot_K.{png,svg}: the blackboard after the annealing of "
                  "pose K (0-based, in the run's order of reachable poses), like the paper's "
                  "Figs. 3-4");
+  app.add_option("--snapshot-temperature", opt.snapshot_temperature,
+                 "with --snapshot: after the I-th temperature of pose K's annealing (0 the "
+                 "hottest ... schedule-steps - 1 the coldest) instead of at its end (Fig. 4)");
   auto& s = opt.mapping.sampler;
   app.add_option("--schedule-steps", s.schedule_steps, "annealing temperatures")
       ->capture_default_str();

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <ostream>
 
@@ -205,6 +206,14 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
         << poses.size() << " reachable poses, numbered 0 to " << int(poses.size()) - 1 << "\n";
     return 2;
   }
+  if (opt.snapshot_temperature &&
+      (!opt.snapshot_pose || *opt.snapshot_temperature < 0 ||
+       *opt.snapshot_temperature >= opt.mapping.sampler.schedule_steps)) {
+    err << "crunchhost: --snapshot-temperature " << *opt.snapshot_temperature
+        << ": needs --snapshot K and a step from 0 (the hottest) to "
+        << opt.mapping.sampler.schedule_steps - 1 << " (the coldest)\n";
+    return 2;
+  }
   SensorModel& sensor = physics ? static_cast<SensorModel&>(*physics_sensor) : ray_sensor;
   MappingOptions mopt = opt.mapping;
   mopt.seed = opt.seed;
@@ -214,13 +223,13 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   ProgressBar bar(opt.json_progress ? out : err, opt.json_progress);
   mopt.progress = [&](int done, int total) { bar(done, total); };
   std::optional<BlackboardSnapshot> snap;
-  if (opt.snapshot_pose) {
-    // Copies the blackboard once, at pose K only.
-    const int k = *opt.snapshot_pose;
-    const SamplerOptions& so = mopt.sampler;
-    mopt.after_pose = [&snap, k, &so](int t, const Pose2& pose, bool annealed,
-                                      const Blackboard& board) {
-      if (t != k) return;
+  // Copies the blackboard once: at pose K, after the chosen temperature (--snapshot-
+  // temperature) or at the end of the annealing (the coldest: its live tables are MAP_t).
+  // (Declared here: the hooks below hold references to it while runMapping runs.)
+  const SamplerOptions& so = mopt.sampler;
+  // `at_end`: the annealing is over, so the live tables are MAP_t (drawn bold).
+  auto take = [&snap, &so](int t, const Pose2& pose, const Blackboard& board,
+                           const std::string& when, bool at_end) {
       BlackboardSnapshot s;
       s.pose_index = t;
       s.robot = pose;
@@ -231,27 +240,60 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
       s.leg_side = m.leg_side;
       for (int slot = 0; slot < board.workingMemoryCapacity(); ++slot)
         if (board.slotUsed(slot)) s.shapelets.push_back(board.shapelet(slot));
-      // After annealing the live tables are MAP_t (eq. 27, Sampler::mapTables).
       for (int32_t id = 0; id < board.tableExtent(); ++id)
-        if (board.table(id).alive) s.tables.push_back({board.table(id).pose, true});
+        if (board.table(id).alive) s.tables.push_back({board.table(id).pose, at_end});
       for (int32_t id = 0; id < board.legExtent(); ++id) {
         const LegHyp& l = board.leg(id);
         if (!l.alive) continue;
         const bool in_table = l.parent != kNone && board.table(l.parent).alive;
         s.legs.push_back({l.pose, l.side, in_table});
       }
-      char buf[200];
-      std::snprintf(buf, sizeof buf,
-                    "pose %d (%.2f, %.2f, %.0f deg), %s at T = exp(-%.1f), coldest of %d, "
-                    "%d sweep(s) each |",
-                    t, pose.x, pose.y, pose.theta * 180.0 / kPi,
-                    annealed ? "annealed" : "no new shapelet; as last annealed",
-                    so.schedule_log_top, so.schedule_steps, so.sweeps_per_temperature);
+      char buf[240];
+      std::snprintf(buf, sizeof buf, "pose %d (%.2f, %.2f, %.0f deg), %s, %d sweep(s) each |", t,
+                    pose.x, pose.y, pose.theta * 180.0 / kPi, when.c_str(),
+                    so.sweeps_per_temperature);
       s.title = buf;
       snap = std::move(s);
     };
+  if (opt.snapshot_pose) {
+    const int k = *opt.snapshot_pose;
+    const std::optional<int> step = opt.snapshot_temperature;
+    if (step) {
+      // During pose K's annealing: the pose index is the one after the last after_pose call.
+      auto next_pose = std::make_shared<int>(0);
+      mopt.after_pose = [next_pose](int t, const Pose2&, bool, const Blackboard&) {
+        *next_pose = t + 1;
+      };
+      const std::vector<Pose2>* pose_list = &poses;
+      const int chosen = *step;
+      mopt.sampler.after_temperature = [&take, &snap, &so, next_pose, pose_list, k, chosen](
+                                           int i, double beta, const Blackboard& board) {
+        if (*next_pose != k || i != chosen || snap) return;
+        char when[120];
+        std::snprintf(when, sizeof when, "after temperature %d of %d (0 hottest), beta = %.3g", i,
+                      so.schedule_steps, beta);
+        take(k, (*pose_list)[static_cast<std::size_t>(k)], board, when,
+             i == so.schedule_steps - 1);
+      };
+    } else {
+      mopt.after_pose = [&take, k, &so](int t, const Pose2& pose, bool annealed,
+                                        const Blackboard& board) {
+        if (t != k) return;
+        char when[120];
+        std::snprintf(when, sizeof when, "%s at T = exp(-%.1f), coldest of %d",
+                      annealed ? "annealed" : "no new shapelet; as last annealed",
+                      so.schedule_log_top, so.schedule_steps);
+        take(t, pose, board, when, true);
+      };
+    }
   }
   const Map map = runMapping(sensor, poses, skipped, mopt);
+  if (opt.snapshot_temperature && !snap) {
+    err << "crunchhost: --snapshot " << *opt.snapshot_pose << ": pose " << *opt.snapshot_pose
+        << " sensed nothing new and did not anneal, so there is no temperature to draw; "
+           "no snapshot written (without --snapshot-temperature it shows the blackboard as the "
+           "last annealing left it)\n";
+  }
   const Evaluation ev = evaluate(map, scene);
   std::optional<PhysicsSummary> physics_summary;
   if (physics) {

@@ -29,6 +29,10 @@ struct SimOptions {
   // pose that sensed nothing new does not anneal: its snapshot shows the blackboard as the last
   // annealing left it, with the robot at pose K. Out of range: exit 2, nothing written.
   std::optional<int> snapshot_pose;
+  // --snapshot-temperature I: take the snapshot after the I-th temperature of pose K's
+  // annealing (0 the hottest, beta = 1 ... schedule_steps - 1 the coldest; paper Fig. 4 is a
+  // hot one) instead of at its end. Needs --snapshot; out of range: exit 2, nothing written.
+  std::optional<int> snapshot_temperature;
 };
 
 // Exit codes: 0 success; 2 bad input (scene, option) with nothing written; 1 failure to write.

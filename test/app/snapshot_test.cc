@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <optional>
 #include <memory>
 #include <sstream>
 
@@ -108,5 +110,65 @@ TEST_CASE("crunchhost --sim --snapshot K beyond the poses is exit 2, nothing wri
           std::string::npos);
     CHECK(err.str().find("20 reachable poses") != std::string::npos);
     CHECK_FALSE(fs::exists(dir));
+  }
+}
+
+TEST_CASE("crunchhost --sim --snapshot K --snapshot-temperature I: part-way through pose K's "
+          "annealing, and the map is unchanged",
+          "[app][snapshot]") {
+  const fs::path dir = fs::temp_directory_path() / "crunch_app_test_snapshot_hot";
+  const fs::path plain = fs::temp_directory_path() / "crunch_app_test_snapshot_hot_plain";
+  fs::remove_all(dir);
+  fs::remove_all(plain);
+  app::SimOptions opt = twoTables(dir);
+  opt.snapshot_pose = 17;        // the last pose of two_tables.json that senses new shapelets
+  opt.snapshot_temperature = 0;  // the hottest, beta = 1
+  std::ostringstream out, err;
+  REQUIRE(app::runSim(opt, out, err) == 0);
+  INFO(err.str());
+  REQUIRE(fs::exists(dir / "snapshot_17.png"));
+  CHECK(fs::file_size(dir / "snapshot_17.png") > 5000);
+  // Taking the picture draws no random number and changes nothing: the same map.
+  std::ostringstream o2, e2;
+  REQUIRE(app::runSim(twoTables(plain), o2, e2) == 0);
+  auto tablesOf = [](const fs::path& p) {
+    std::ifstream in(p / "map.json");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    const std::string text = ss.str();
+    return text.substr(0, text.find("\"stats\""));  // tables, walls, per_pose (not wall time)
+  };
+  CHECK(tablesOf(dir) == tablesOf(plain));
+}
+
+TEST_CASE("crunchhost --sim --snapshot-temperature at a pose that did not anneal writes none, "
+          "and says why",
+          "[app][snapshot]") {
+  const fs::path dir = fs::temp_directory_path() / "crunch_app_test_snapshot_cold";
+  fs::remove_all(dir);
+  app::SimOptions opt = twoTables(dir);
+  opt.snapshot_pose = 19;  // senses nothing new (measured): no annealing at pose 19
+  opt.snapshot_temperature = 3;
+  std::ostringstream out, err;
+  REQUIRE(app::runSim(opt, out, err) == 0);
+  CHECK_FALSE(fs::exists(dir / "snapshot_19.png"));
+  CHECK(err.str().find("did not anneal") != std::string::npos);
+}
+
+TEST_CASE("crunchhost --sim --snapshot-temperature out of range or without --snapshot is exit 2",
+          "[app][snapshot]") {
+  for (const std::optional<int> k : {std::optional<int>(19), std::optional<int>()}) {
+    for (int i : {16, -1}) {
+      if (!k && i == -1) continue;
+      const fs::path dir = fs::temp_directory_path() / "crunch_app_test_snapshot_badT";
+      fs::remove_all(dir);
+      app::SimOptions opt = twoTables(dir);
+      opt.snapshot_pose = k;
+      opt.snapshot_temperature = i;
+      std::ostringstream out, err;
+      CHECK(app::runSim(opt, out, err) == 2);
+      CHECK(err.str().find("--snapshot-temperature") != std::string::npos);
+      CHECK_FALSE(fs::exists(dir));
+    }
   }
 }

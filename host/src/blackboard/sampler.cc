@@ -28,9 +28,11 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
 }
 
 void Sampler::anneal() {
-  for (double beta : betas_) {
+  for (std::size_t step = 0; step < betas_.size(); ++step) {
+    const double beta = betas_[step];
     for (int s = 0; s < opt_.sweeps_per_temperature; ++s) sweep(beta);
     if (opt_.prune) prune();
+    if (opt_.after_temperature) opt_.after_temperature(static_cast<int>(step), beta, bb_);
   }
 }
 

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,11 @@ struct SamplerOptions {
   // Each leg near another corner of a placement adds this to its weight (base weight 1).
   double smart_parent_gain = 8.0;
   bool prune = true;
+  // Called by anneal() after each temperature (its sweeps and pruning) with the temperature's
+  // place in the annealing, 0 = the hottest (beta_{schedule_steps-1}) ... schedule_steps - 1 =
+  // the coldest, its beta, and the blackboard: for pictures of it part-way (paper Fig. 4).
+  // Empty by default.
+  std::function<void(int step, double beta, const Blackboard& board)> after_temperature;
 
   // Empty when valid, else what is wrong.
   std::string validate() const;
