@@ -631,20 +631,17 @@ Error cairoError(const std::string& path, cairo_status_t status) {
   return pictureError(path, cairo_status_to_string(status));
 }
 
-}  // namespace
-
-Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
-                    const RenderOptions& options) {
-  if (Status s = checkInputs(truth, path, options); !s) return s;
-  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
-
+// Draws with `draw(cairo_t*)` on a canvas-sized image and writes it to `path` as a PNG through
+// an AtomicFile: the one PNG writer of the map and snapshot pictures.
+template <typename Draw>
+Status writePng(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
   SurfacePtr surface = makeImageSurface(canvas.widthPx(), canvas.heightPx());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
   {
     ContextPtr cr = makeContext(surface.get());
-    drawPicture(cr.get(), canvas, map, truth, options);
+    draw(cr.get());
     if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
       return cairoError(path, st);
     }
@@ -660,22 +657,20 @@ Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
   return file.value().commit();
 }
 
-Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
-                    const RenderOptions& options) {
-  if (Status s = checkInputs(truth, path, options); !s) return s;
-  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+// The same as an SVG document written straight into the AtomicFile's temporary file.
+template <typename Draw>
+Status writeSvg(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
   // Declared before the surface so the surface (which holds the open temp file) is destroyed,
   // closing the file, before the temp is removed on a failure path.
   Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
   if (!file) return file.error();
-
   SurfacePtr surface = makeSvgSurface(file.value().tempPath(), canvas.widthPx(), canvas.heightPx());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
   {
     ContextPtr cr = makeContext(surface.get());
-    drawPicture(cr.get(), canvas, map, truth, options);
+    draw(cr.get());
     if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
       return cairoError(path, st);
     }
@@ -687,32 +682,31 @@ Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
   return file.value().commit();
 }
 
+}  // namespace
+
+Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options) {
+  if (Status s = checkInputs(truth, path, options); !s) return s;
+  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+  return writePng(canvas, path,
+                  [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
+}
+
+Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options) {
+  if (Status s = checkInputs(truth, path, options); !s) return s;
+  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+  return writeSvg(canvas, path,
+                  [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
+}
+
 Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre) {
   RenderOptions options;
   options.pixels_per_metre = pixels_per_metre;
   if (Status s = checkInputs(truth, path, options); !s) return s;
   const MapCanvas canvas(truth.width, truth.depth, pixels_per_metre);
-  SurfacePtr surface = makeImageSurface(canvas.widthPx(), canvas.heightPx());
-  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st);
-  }
-  {
-    ContextPtr cr = makeContext(surface.get());
-    drawSnapshot(cr.get(), canvas, snap, truth);
-    if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
-      return cairoError(path, st);
-    }
-  }
-  cairo_surface_flush(surface.get());
-  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
-  if (!file) return file.error();
-  if (cairo_status_t st =
-          cairo_surface_write_to_png(surface.get(), file.value().tempPath().c_str());
-      st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st);
-  }
-  return file.value().commit();
+  return writePng(canvas, path, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
 }
 
 Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
@@ -721,24 +715,7 @@ Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
   options.pixels_per_metre = pixels_per_metre;
   if (Status s = checkInputs(truth, path, options); !s) return s;
   const MapCanvas canvas(truth.width, truth.depth, pixels_per_metre);
-  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
-  if (!file) return file.error();
-  SurfacePtr surface = makeSvgSurface(file.value().tempPath(), canvas.widthPx(), canvas.heightPx());
-  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st);
-  }
-  {
-    ContextPtr cr = makeContext(surface.get());
-    drawSnapshot(cr.get(), canvas, snap, truth);
-    if (cairo_status_t st = cairo_status(cr.get()); st != CAIRO_STATUS_SUCCESS) {
-      return cairoError(path, st);
-    }
-  }
-  cairo_surface_finish(surface.get());
-  if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
-    return cairoError(path, st);
-  }
-  return file.value().commit();
+  return writeSvg(canvas, path, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
 }
 
 }  // namespace crunch
