@@ -25,7 +25,7 @@
 #include "crunch/blackboard/sampler.h"
 #include "crunch/blackboard/spatial_hash.h"
 #include "crunch/core/rng.h"
-#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/run_mapping.h"
 #include "crunch/scene/scene.h"
 #include "crunch_sim/ray_sensor.h"
 #include "crunch_sim/world.h"

@@ -1,6 +1,6 @@
 // Google Benchmark for the per-byte data path of `crunchhost --robot` (issue 5, "Speed"): USB
 // chunks through the SPSC ring into the bridge decoder, the sample assembler and the signal
-// pipeline, as host/app/robot_session.cc wires them, against the need of 28 boards x 2 kHz =
+// pipeline, as session/robot_session.cc wires them, against the need of 28 boards x 2 kHz =
 // 56,000 frames/s; and the latency from the USB chunk that completes a contact episode to the
 // episode and to its WhiskEvidence report. Results and how to run them: docs/BENCHMARKS.md.
 //
@@ -59,8 +59,8 @@
 #include "crunch/io/recording.h"
 #include "crunch/io/sample_assembler.h"
 #include "crunch/io/spsc_ring.h"
-#include "crunch/mapping/shapelet.h"
-#include "crunch/mapping/whisk_evidence.h"
+#include "crunch/robot/shapelet.h"
+#include "crunch/session/whisk_evidence.h"
 #include "crunch/signal/models_io.h"
 #include "crunch/signal/pipeline.h"
 #include "crunch_sim/training.h"

@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "crunch/core/geometry.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/scene/scene.h"
 #include "crunch_sim/beam_probe.h"
 #include "crunch_sim/whisker_physics.h"

@@ -25,9 +25,12 @@
 #include "crunch/scene/scene.h"
 #include "crunch/signal/models_io.h"
 #include "crunch_sim/training.h"
-#include "robot_session.h"
+#include "crunch/session/robot_session.h"
 
 namespace crunch::app {
+
+using session::RobotSession;
+using session::RobotSessionOptions;
 
 namespace {
 

@@ -29,7 +29,7 @@
 #include <iosfwd>
 #include <string>
 
-#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/run_mapping.h"
 
 namespace crunch::app {
 

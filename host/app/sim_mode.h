@@ -8,7 +8,7 @@
 #include <optional>
 #include <string>
 
-#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/run_mapping.h"
 
 namespace crunch::app {
 

@@ -22,7 +22,7 @@
 #include "crunch/core/atomic_file.h"
 #include "crunch/mapping/evaluation.h"
 #include "crunch/mapping/map_io.h"
-#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/run_mapping.h"
 #include "crunch/scene/scene.h"
 #include "crunch_sim/ray_sensor.h"
 #include "crunch_sim/world.h"

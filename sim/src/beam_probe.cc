@@ -3,7 +3,7 @@
 #include <cmath>
 #include <string>
 
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/scene/scene.h"
 #include "crunch_sim/world.h"
 

@@ -5,7 +5,7 @@
 
 #include "crunch/blackboard/params.h"
 #include "crunch/core/geometry.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 
 namespace crunch::testing {
 

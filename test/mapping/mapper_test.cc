@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/run_mapping.h"
 
 using namespace crunch;
 

@@ -8,7 +8,7 @@
 #include "crunch/core/geometry.h"
 #include "crunch/core/rng.h"
 #include "crunch/mapping/sensor_model.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/scene/scene.h"
 #include "crunch_sim/ray_sensor.h"
 #include "crunch_sim/world.h"

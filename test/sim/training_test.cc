@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "crunch/core/geometry.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "train_mode.h"
 
 using crunch::kPi;

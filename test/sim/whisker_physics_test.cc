@@ -10,7 +10,7 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/rng.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/scene/scene.h"
 #include "crunch_sim/beam_probe.h"
 #include "crunch_sim/hall_model.h"

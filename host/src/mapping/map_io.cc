@@ -204,15 +204,4 @@ Result<Map> parseMapJson(const std::string& text, const std::string& source) {
 // ---------------------------------------------------------------------------------------------
 // Files. (writeFileAtomic is in core/atomic_file.cc.)
 
-Status ensureDirectory(const std::string& dir) {
-  if (dir.empty()) return Error{"output directory: the name is empty"};
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) return Error{dir + ": cannot create directory: " + ec.message()};
-  if (!std::filesystem::is_directory(dir, ec)) {
-    return Error{dir + ": cannot create directory: exists and is not a directory"};
-  }
-  return okStatus();
-}
-
 }  // namespace crunch

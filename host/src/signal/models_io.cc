@@ -13,7 +13,7 @@
 #include <system_error>
 
 #include "core/json_fields.h"
-#include "crunch/mapping/map_io.h"  // writeFileAtomic
+#include "crunch/core/atomic_file.h"  // writeFileAtomic, ensureDirectory
 
 namespace crunch::signal {
 

@@ -41,7 +41,7 @@
 #include <string>
 #include <vector>
 
-#include "crunch/behaviour/mobile_base.h"
+#include "crunch/robot/mobile_base.h"
 #include "crunch/core/result.h"
 #include "crunch/io/create_oi.h"
 

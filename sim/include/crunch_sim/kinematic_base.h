@@ -12,7 +12,7 @@
 // Thread-safety: none. Allocation: none after construction.
 #pragma once
 
-#include "crunch/behaviour/mobile_base.h"
+#include "crunch/robot/mobile_base.h"
 #include "crunch_sim/world.h"
 
 namespace crunch::sim {

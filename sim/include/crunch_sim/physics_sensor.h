@@ -5,7 +5,7 @@
 // Hall model, the firmware on virtual whisker boards, the bridge decoder and the signal
 // pipeline (WhiskerRig). Its noise is what those classifiers make; nothing is added.
 //
-// Reports and negative evidence come from WhiskEvidence (mapping/whisk_evidence.h), which
+// Reports and negative evidence come from WhiskEvidence (session/whisk_evidence.h), which
 // `crunchhost --robot` uses too. One whisk may give several contact episodes (the whisker meets the object on the
 // toward and on the return pass); each whisker reports at most once per whisk, from the first
 // episode in which it touched: its f1 is the peak of that first pass (eq. 1), as the shipped
@@ -37,7 +37,7 @@
 #include <vector>
 
 #include "crunch/mapping/sensor_model.h"
-#include "crunch/mapping/whisk_evidence.h"
+#include "crunch/session/whisk_evidence.h"
 #include "crunch/signal/models_io.h"
 #include "crunch_sim/whisker_rig.h"
 #include "crunch_sim/world.h"

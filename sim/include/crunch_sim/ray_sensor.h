@@ -30,7 +30,7 @@
 #include "crunch/core/result.h"
 #include "crunch/core/rng.h"
 #include "crunch/mapping/sensor_model.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch_sim/world.h"
 
 namespace crunch::sim {

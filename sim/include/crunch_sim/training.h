@@ -52,7 +52,7 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/signal/models_io.h"
 #include "crunch/signal/orientation_templates.h"
 #include "crunch/signal/radial_distance.h"

@@ -63,10 +63,10 @@
 #include <utility>
 #include <vector>
 
-#include "crunch/behaviour/mobile_base.h"
+#include "crunch/robot/mobile_base.h"
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch_sim/world.h"
 
 // ODE handle types (see world.h); <ode/ode.h> stays in the .cc.

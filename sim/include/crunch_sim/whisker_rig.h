@@ -33,7 +33,7 @@
 #include "crunch/core/result.h"
 #include "crunch/core/rng.h"
 #include "crunch/io/bridge_stream.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/signal/pipeline.h"
 #include "crunch_sim/hall_model.h"
 #include "crunch_sim/virtual_whisker_board.h"

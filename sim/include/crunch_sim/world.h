@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "crunch/core/geometry.h"
-#include "crunch/mapping/shapelet.h"  // kRobotRadius
+#include "crunch/robot/shapelet.h"  // kRobotRadius
 #include "crunch/scene/scene.h"
 
 // ODE's handle types (dSpaceID is dxSpace*, dGeomID is dxGeom*); <ode/ode.h> stays in world.cc.

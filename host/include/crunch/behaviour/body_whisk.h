@@ -50,7 +50,7 @@
 #include <span>
 #include <vector>
 
-#include "crunch/behaviour/mobile_base.h"
+#include "crunch/robot/mobile_base.h"
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
 #include "crunch/core/rng.h"

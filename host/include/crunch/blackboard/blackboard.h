@@ -27,8 +27,8 @@
 #include "crunch/blackboard/params.h"
 #include "crunch/blackboard/pool.h"
 #include "crunch/blackboard/spatial_hash.h"
-#include "crunch/mapping/free_space.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/blackboard/free_space.h"
+#include "crunch/robot/shapelet.h"
 
 namespace crunch {
 

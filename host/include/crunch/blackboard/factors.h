@@ -6,7 +6,7 @@
 
 #include "crunch/blackboard/hypotheses.h"
 #include "crunch/blackboard/params.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 
 namespace crunch {
 

@@ -1,5 +1,5 @@
 // Hypothesis records of the blackboard: tables and legs (paper eqs. 7-8). Shapelets are the
-// observations (mapping/shapelet.h). Plain data, owned by the Blackboard's pools.
+// observations (robot/shapelet.h). Plain data, owned by the Blackboard's pools.
 #pragma once
 
 #include <array>

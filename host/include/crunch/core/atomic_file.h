@@ -67,4 +67,8 @@ class AtomicFile {
 // "<path>: cannot write file: <step>: <reason>".
 Status writeFileAtomic(const std::string& path, std::string_view contents);
 
+// Creates `dir` and any missing parents; succeeds if it already is a directory. The Error names
+// the directory.
+Status ensureDirectory(const std::string& dir);
+
 }  // namespace crunch

@@ -37,7 +37,7 @@
 #include <string>
 #include <thread>
 
-#include "crunch/behaviour/mobile_base.h"
+#include "crunch/robot/mobile_base.h"
 #include "crunch/io/create_oi.h"
 #include "crunch/io/serial_port.h"
 

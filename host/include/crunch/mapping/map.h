@@ -6,7 +6,7 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/scene/scene.h"
 
 namespace crunch {

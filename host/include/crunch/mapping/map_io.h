@@ -1,5 +1,5 @@
-// The map file (OUT/map.json, ARCHITECTURE.md §4) and the file-system helpers every writer of
-// an output directory uses: an output file is either the old one or the complete new one.
+// The map file (OUT/map.json, ARCHITECTURE.md §4). Writers use core/atomic_file.h, so an output
+// file is either the old one or the complete new one.
 #pragma once
 
 #include <string>
@@ -25,12 +25,5 @@ std::string mapToJson(const Map& map);
 // coordinates, a per-pose entry its pose. Other fields default as in map.h. Unknown keys are
 // ignored (the contract allows extra keys). The result has no shapelets.
 Result<Map> parseMapJson(const std::string& text, const std::string& source);
-
-// writeFileAtomic(path, contents), which every writer of an output file uses, is declared in
-// crunch/core/atomic_file.h (included above).
-
-// Creates `dir` and any missing parents; succeeds if it already is a directory. The Error names
-// the directory.
-Status ensureDirectory(const std::string& dir);
 
 }  // namespace crunch

@@ -1,6 +1,6 @@
 // The mapping run of paper §2.8 one pose at a time, for a robot that decides where to go as it
 // goes (`crunchhost --robot`, `--replay`) as well as for the pre-determined pose grid
-// (runMapping, pipeline.h): each pose's contact reports become shapelets (eqs. 4-6) in the
+// (runMapping, run_mapping.h): each pose's contact reports become shapelets (eqs. 4-6) in the
 // blackboard's working memory, the blackboard is annealed (Algorithm 1) and MAP_t (eq. 27) is
 // recorded; at the end the collation is fused into one map (fused_map.h), by one global
 // inference over every shapelet when MappingOptions::global_sweeps > 0.
@@ -21,10 +21,10 @@
 #include "crunch/blackboard/blackboard.h"
 #include "crunch/blackboard/sampler.h"
 #include "crunch/core/rng.h"
-#include "crunch/mapping/free_space.h"
+#include "crunch/blackboard/free_space.h"
 #include "crunch/mapping/map.h"
-#include "crunch/mapping/pipeline.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/mapping/mapping_options.h"
+#include "crunch/robot/shapelet.h"
 
 namespace crunch {
 

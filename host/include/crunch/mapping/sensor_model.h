@@ -8,8 +8,8 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/rng.h"
-#include "crunch/mapping/free_space.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/blackboard/free_space.h"
+#include "crunch/robot/shapelet.h"
 
 namespace crunch {
 

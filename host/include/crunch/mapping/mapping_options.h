@@ -1,17 +1,15 @@
-// The mapping run of paper §2.8: visit the poses in order, turn each pose's contact reports into
-// shapelets, push them into the blackboard's working memory, anneal (Algorithm 1) and record
-// MAP_t (eq. 27); then fuse the collation into one map (fused_map.h).
+// The settings of a mapping run (paper §2.8): the model's parameters, the sampler's schedule,
+// working memory, fusion and the global inference. Used by Mapper (mapper.h) one pose at a time
+// and by runMapping (run_mapping.h) over a pose list.
 #pragma once
 
 #include <cstdint>
 #include <functional>
-#include <vector>
 
+#include "crunch/blackboard/blackboard.h"
 #include "crunch/blackboard/params.h"
 #include "crunch/blackboard/sampler.h"
 #include "crunch/mapping/fused_map.h"
-#include "crunch/mapping/map.h"
-#include "crunch/mapping/sensor_model.h"
 
 namespace crunch {
 
@@ -37,12 +35,5 @@ struct MappingOptions {
   // temperature, so its live tables are MAP_t). Empty by default: nothing is called or copied.
   std::function<void(int, const Pose2&, bool, const Blackboard&)> after_pose;
 };
-
-// Maps the world seen through `sensor` from `poses` (already filtered for reachability;
-// `skipped` says how many were dropped). Deterministic for a given seed: sensor noise and the
-// sampler draw from separate streams, so sampler settings do not change the sensed data.
-// Inference runs at poses that sensed at least one new shapelet; per_pose lists those poses.
-Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
-               const MappingOptions& options);
 
 }  // namespace crunch

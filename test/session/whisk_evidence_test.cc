@@ -1,6 +1,6 @@
-// Tests of WhiskEvidence (crunch/mapping/whisk_evidence.h): from synthetic contact episodes and
+// Tests of WhiskEvidence (crunch/session/whisk_evidence.h): from synthetic contact episodes and
 // negative-evidence samples to the mapper's reports and free rays.
-#include "crunch/mapping/whisk_evidence.h"
+#include "crunch/session/whisk_evidence.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>

@@ -9,13 +9,9 @@
 #include <vector>
 
 #include "crunch/core/geometry.h"
+#include "crunch/robot/shapelet.h"  // FreeRay
 
 namespace crunch {
-
-// A whisker sample that touched nothing: the whole whisker from base to tip was free.
-struct FreeRay {
-  Vec2 a, b;
-};
 
 class FreeSpaceGrid {
  public:

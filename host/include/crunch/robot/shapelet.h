@@ -6,23 +6,9 @@
 #include <vector>
 
 #include "crunch/core/geometry.h"
+#include "crunch/robot/whiskers.h"
 
 namespace crunch {
-
-// One whisker's mount on the robot, in the robot frame.
-struct WhiskerMount {
-  Vec2 base;         // follicle position, metres
-  double bearing;    // direction the whisker points, radians from the robot's +x
-  double length;     // external length, metres
-};
-
-// The four horizontal front whiskers of the paper's mapping experiment (§2.2). Bases on the
-// front rim of the 0.33 m Create-sized body at bearings -33.75, -11.25, +11.25, +33.75 degrees,
-// pointing radially outward, 0.14 m external length. Over the four compass headings of a pose
-// the 16 whisker directions are then evenly 22.5 degrees apart (docs/DESIGN.md).
-std::vector<WhiskerMount> defaultWhiskerArray();
-
-inline constexpr double kRobotRadius = 0.165;  // Create-sized cylinder, 0.33 m diameter
 
 // An egocentric contact report from one whisker (eqs. 4-5).
 struct ContactReport {
@@ -40,6 +26,12 @@ struct Shapelet {
   double ox = 0.0, oy = 0.0;  // where it was sensed from (the whisker base): the free side
   int pose_index = -1;
   int whisker = -1;
+};
+
+// A whisker sample that touched nothing: the whole whisker from base to tip was free (negative
+// evidence, blackboard/free_space.h).
+struct FreeRay {
+  Vec2 a, b;
 };
 
 // Converts a report to a shapelet with the report's robot pose; r is clamped to [0, length]

@@ -1,4 +1,4 @@
-#include "crunch/mapping/pipeline.h"
+#include "crunch/mapping/run_mapping.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "crunch/mapping/free_space.h"
+#include "crunch/blackboard/free_space.h"
 
 #include <catch2/catch.hpp>
 

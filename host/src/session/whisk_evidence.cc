@@ -1,4 +1,4 @@
-#include "crunch/mapping/whisk_evidence.h"
+#include "crunch/session/whisk_evidence.h"
 
 #include <algorithm>
 #include <cmath>

@@ -29,8 +29,8 @@
 #include <vector>
 
 #include "crunch/core/geometry.h"
-#include "crunch/mapping/free_space.h"
-#include "crunch/mapping/shapelet.h"
+#include "crunch/blackboard/free_space.h"
+#include "crunch/robot/shapelet.h"
 #include "crunch/signal/pipeline.h"
 
 namespace crunch {

@@ -1,8 +1,8 @@
-#include "robot_session.h"
+#include "crunch/session/robot_session.h"
 
 #include <utility>
 
-namespace crunch::app {
+namespace crunch::session {
 
 namespace {
 constexpr std::size_t kPoseHistory = 1u << 16;  // 32.8 s of samples: more than an episode
@@ -148,4 +148,4 @@ Map RobotSession::finish() {
   return mapper_.finish();
 }
 
-}  // namespace crunch::app
+}  // namespace crunch::session

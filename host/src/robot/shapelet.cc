@@ -1,13 +1,10 @@
-#include "crunch/mapping/shapelet.h"
+#include "crunch/robot/shapelet.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace crunch {
 namespace {
-
-constexpr double kDeg = kPi / 180.0;
-constexpr double kWhiskerLength = 0.14;  // external length (§2.4: 140 mm of the 160 mm)
 
 // An orientation modulo pi, as a value in [0, pi).
 double wrapHalfTurn(double a) {
@@ -22,15 +19,6 @@ bool finite(const Pose2& p) {
 }
 
 }  // namespace
-
-std::vector<WhiskerMount> defaultWhiskerArray() {
-  std::vector<WhiskerMount> mounts;
-  for (const double deg : {-33.75, -11.25, 11.25, 33.75}) {
-    const double b = deg * kDeg;
-    mounts.push_back({kRobotRadius * Vec2(std::cos(b), std::sin(b)), b, kWhiskerLength});
-  }
-  return mounts;
-}
 
 bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mounts, int pose_index,
                 Shapelet& out) {

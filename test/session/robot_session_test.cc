@@ -1,8 +1,8 @@
-// RobotSession (host/app/robot_session.h) at the chunk level, in process: the simulated robot's
+// RobotSession (host/include/crunch/session/robot_session.h) at the chunk level, in process: the simulated robot's
 // bridge bytes and OI sensor packets as chunks, marks around an in-place body whisk at a table
 // leg, recorded by one session and replayed by another. (The hil tests run the same path through
 // real USB and a pty; this one runs under the sanitizers too.)
-#include "robot_session.h"
+#include "crunch/session/robot_session.h"
 
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -34,10 +34,10 @@ Scene oneTable() {
   return s;
 }
 
-app::RobotSessionOptions sessionOptions(const Pose2& start) {
+session::RobotSessionOptions sessionOptions(const Pose2& start) {
   auto models = signal::loadModels(std::string(CRUNCH_SOURCE_DIR) + "/models/sim_models.json");
   REQUIRE(models);
-  app::RobotSessionOptions o;
+  session::RobotSessionOptions o;
   o.models = models.value();
   o.pipeline = sim::physicsRigOptions(1).pipeline;
   o.mounts = defaultWhiskerArray();
@@ -49,7 +49,7 @@ app::RobotSessionOptions sessionOptions(const Pose2& start) {
 }
 
 // `n` ticks of the rig's bridge bytes into the session, one chunk each.
-void steps(sim::WhiskerRig& rig, app::RobotSession& session, int n) {
+void steps(sim::WhiskerRig& rig, session::RobotSession& session, int n) {
   io::Chunk chunk;
   for (int i = 0; i < n; ++i) {
     (void)rig.step();
@@ -61,7 +61,7 @@ void steps(sim::WhiskerRig& rig, app::RobotSession& session, int n) {
 // Feeds `session` what the robot would send while `rig` does an in-place whisk: one bridge chunk
 // per 1 ms (two ticks), an OI stream packet (bumps, distance, angle, mode) per 15 ms from the
 // rig's odometry, whisk start/end marks.
-void whiskThroughSession(sim::WhiskerRig& rig, app::RobotSession& session) {
+void whiskThroughSession(sim::WhiskerRig& rig, session::RobotSession& session) {
   sim::WhiskeredRobot& robot = rig.robot();
   BodyWhisk::Options wopt;
   BodyWhisk whisk(robot, wopt);
@@ -124,9 +124,9 @@ TEST_CASE("RobotSession: a whisk at a leg is reported, recorded, and replays to 
   REQUIRE(rig);
   TempDir dir;
   const std::string path = dir.file("run.crec");
-  auto created = app::RobotSession::create(sessionOptions(start));
+  auto created = session::RobotSession::create(sessionOptions(start));
   REQUIRE(created);
-  app::RobotSession& live = *created.value();
+  session::RobotSession& live = *created.value();
   auto writer = io::RecordingWriter::create(path, "{\"test\":1}");
   REQUIRE(writer);
   live.setRecorder(writer.value().get());
@@ -162,7 +162,7 @@ TEST_CASE("RobotSession: a whisk at a leg is reported, recorded, and replays to 
   auto reader = io::RecordingReader::open(path);
   REQUIRE(reader);
   CHECK(reader.value()->metadata() == "{\"test\":1}");
-  auto again = app::RobotSession::create(sessionOptions(start));
+  auto again = session::RobotSession::create(sessionOptions(start));
   REQUIRE(again);
   io::RecordingReader::Next next;
   while ((next = reader.value()->next(chunk)) == io::RecordingReader::Next::kRecord) {
@@ -186,9 +186,9 @@ TEST_CASE("RobotSession: contacts outside a whisk are counted, not reported", "[
   auto rig = sim::WhiskerRig::create(*world, defaultWhiskerArray(), start,
                                      sim::physicsRigOptions(1));
   REQUIRE(rig);
-  auto created = app::RobotSession::create(sessionOptions(start));
+  auto created = session::RobotSession::create(sessionOptions(start));
   REQUIRE(created);
-  app::RobotSession& session = *created.value();
+  session::RobotSession& session = *created.value();
   steps(*rig.value(), session, 2400);
   io::Chunk chunk;
   // The same sweep, but no whisk-start mark: a robot turning, not whisking.
@@ -209,7 +209,7 @@ TEST_CASE("RobotSession: contacts outside a whisk are counted, not reported", "[
 }
 
 TEST_CASE("RobotSession: a whisker array that is not four whiskers is an error", "[app]") {
-  app::RobotSessionOptions o = sessionOptions({});
+  session::RobotSessionOptions o = sessionOptions({});
   o.mounts.pop_back();
-  CHECK(!app::RobotSession::create(o));
+  CHECK(!session::RobotSession::create(o));
 }

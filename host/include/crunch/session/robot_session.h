@@ -42,10 +42,10 @@
 #include "crunch/io/recording.h"
 #include "crunch/io/sample_assembler.h"
 #include "crunch/mapping/mapper.h"
-#include "crunch/mapping/whisk_evidence.h"
+#include "crunch/session/whisk_evidence.h"
 #include "crunch/signal/pipeline.h"
 
-namespace crunch::app {
+namespace crunch::session {
 
 struct RobotSessionOptions {
   signal::SignalModels models;
@@ -130,4 +130,4 @@ class RobotSession {
   RobotSessionCounts counts_;
 };
 
-}  // namespace crunch::app
+}  // namespace crunch::session

@@ -1,0 +1,21 @@
+// The mapping run of paper §2.8: visit the poses in order, turn each pose's contact reports into
+// shapelets, push them into the blackboard's working memory, anneal (Algorithm 1) and record
+// MAP_t (eq. 27); then fuse the collation into one map (fused_map.h).
+#pragma once
+
+#include <vector>
+
+#include "crunch/mapping/map.h"
+#include "crunch/mapping/mapping_options.h"
+#include "crunch/mapping/sensor_model.h"
+
+namespace crunch {
+
+// Maps the world seen through `sensor` from `poses` (already filtered for reachability;
+// `skipped` says how many were dropped). Deterministic for a given seed: sensor noise and the
+// sampler draw from separate streams, so sampler settings do not change the sensed data.
+// Inference runs at poses that sensed at least one new shapelet; per_pose lists those poses.
+Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
+               const MappingOptions& options);
+
+}  // namespace crunch

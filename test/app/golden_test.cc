@@ -1,0 +1,135 @@
+// Behaviour kept across restructuring (issue 11): outputs of the `crunchhost` binary compared
+// with files made by the binary of commit 1e043c6, before the sensing chain and the control loop
+// moved into the library (test/golden/README.md says how each was made).
+//   - `--sim` (gaussian sensor, realistic noise, seed 1) on the default arena and on the test
+//     scenes: map.json equal in every value but the measured wall time.
+//   - `sweep`: every column of every row equal but wall_s and the process's peak RSS.
+//   - `--replay` of a `--robot` recording made inside crunch-virtual-robot before the move:
+//     the same map and the same shapelets, counts and final pose in report.json.
+// "Equal" is exact: the same numbers bit for bit (JSON text round-trips doubles exactly).
+#include <sys/wait.h>
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "support/temp_dir.h"
+
+namespace {
+
+using json = nlohmann::json;
+
+const std::string kSource = CRUNCH_SOURCE_DIR;
+
+// Runs `command` in the project's root; returns its exit status, output in `out`.
+int run(const std::string& command, std::string* out = nullptr) {
+  FILE* p = popen(("cd '" + kSource + "' && " + command + " 2>&1").c_str(), "r");
+  REQUIRE(p != nullptr);
+  std::string text;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p) != nullptr) text += buf;
+  const int status = pclose(p);
+  if (out != nullptr) *out = text;
+  INFO(text);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+json readJson(const std::string& path) {
+  std::ifstream in(path);
+  INFO(path);
+  REQUIRE(in.good());
+  return json::parse(in);
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  INFO(path);
+  REQUIRE(in.good());
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// map.json without the one measured value in it.
+json mapWithoutTime(json map) {
+  map["stats"]["wall_s"] = 0.0;
+  return map;
+}
+
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> fields;
+  std::istringstream in(line);
+  for (std::string f; std::getline(in, f, ',');) fields.push_back(f);
+  return fields;
+}
+
+}  // namespace
+
+TEST_CASE("Golden: --sim maps the test scenes exactly as before the restructuring",
+          "[golden]") {
+  const std::string scene = GENERATE(as<std::string>{}, "default", "adjacent_tables", "dense_room",
+                                     "empty_arena", "interior_walls", "sparse_poses",
+                                     "table_at_wall", "two_tables", "hil_one_table",
+                                     "physics_one_table");
+  TempDir dir;
+  const std::string arg = scene == "default" ? "" : " --scene test/scenes/" + scene + ".json";
+  REQUIRE(run(std::string(CRUNCHHOST) + " --sim" + arg + " --json --out " + dir.path().string()) ==
+          0);
+  const json got = mapWithoutTime(readJson(dir.file("map.json")));
+  const json want = readJson(kSource + "/test/golden/maps/" + scene + ".json");
+  INFO(scene << ": " << json::diff(want, got).dump().substr(0, 2000));
+  CHECK(got == want);
+}
+
+TEST_CASE("Golden: sweep rows are the same as before the restructuring", "[golden]") {
+  TempDir dir;
+  REQUIRE(run(std::string(CRUNCHHOST) +
+              " sweep --scene test/scenes/two_tables.json --scene default --noise-scale 1,3"
+              " --schedule-steps 4,8 --seeds 2 --jobs 2 --out " + dir.path().string()) == 0);
+  const auto got = splitLines(readText(dir.file("sweep.csv")));
+  const auto want = splitLines(readText(kSource + "/test/golden/sweep_before_refactor.csv"));
+  REQUIRE(got.size() == want.size());
+  REQUIRE(got[0] == want[0]);  // the header
+  const auto columns = splitCsv(want[0]);
+  for (std::size_t i = 1; i < want.size(); ++i) {
+    const auto g = splitCsv(got[i]);
+    const auto w = splitCsv(want[i]);
+    REQUIRE(g.size() == columns.size());
+    REQUIRE(w.size() == columns.size());
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      if (columns[c] == "wall_s" || columns[c] == "process_peak_rss_kib") continue;
+      INFO("row " << i << " column " << columns[c]);
+      CHECK(g[c] == w[c]);
+    }
+  }
+}
+
+TEST_CASE("Golden: --replay of a recording made before the restructuring gives the same map",
+          "[golden]") {
+  TempDir dir;
+  REQUIRE(run("tar -xJf test/golden/replay/recording.tar.xz -C " + dir.path().string()) == 0);
+  const std::string out = dir.file("out");
+  REQUIRE(run(std::string(CRUNCHHOST) + " --replay " + dir.file("recording.crec") + " --out " +
+              out) == 0);
+  const json got = mapWithoutTime(readJson(out + "/map.json"));
+  const json want = readJson(kSource + "/test/golden/replay/map.json");
+  INFO(json::diff(want, got).dump());
+  CHECK(got == want);
+  CHECK(got["per_pose"].size() >= 2);  // the recording holds whisks that sensed something
+  const json report = readJson(out + "/report.json");
+  const json subset = readJson(kSource + "/test/golden/replay/report_subset.json");
+  CHECK(report["shapelets"] == subset["shapelets"]);
+  CHECK(report["contacts"] == subset["contacts"]);
+  CHECK(report["final_pose"] == subset["final_pose"]);
+}
