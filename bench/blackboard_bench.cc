@@ -270,7 +270,7 @@ void BM_WholeRun(benchmark::State& state) {
   crunch::MapStats stats;
   size_t fused = 0;
   for (auto _ : state) {
-    const crunch::Map map = crunch::runMapping(sensor, poses, skipped, mopt);
+    const crunch::Map map = crunch::runMapping(sensor, poses, skipped, mopt).value();
     stats = map.stats;
     fused = map.tables.size();
     benchmark::DoNotOptimize(fused);

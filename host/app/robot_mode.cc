@@ -21,6 +21,7 @@
 #include "crunch/io/spsc_ring.h"
 #include "crunch/io/usb_bridge.h"
 #include "crunch/mapping/map_io.h"
+#include "crunch/mapping/sensor_model.h"
 #include "crunch/render/map_render.h"
 #include "crunch/scene/scene.h"
 #include "crunch/signal/models_io.h"
@@ -103,9 +104,7 @@ RobotSessionOptions sessionOptions(const signal::SignalModels& models, const Map
   s.mapping = m;
   s.mapping.seed = seed;
   s.mapping.progress = nullptr;
-  s.mapping.model.sigma_r_shapelet = std::max(s.mapping.model.sigma_r_shapelet, 0.00498);
-  s.mapping.model.sigma_theta_shapelet =
-      std::max(s.mapping.model.sigma_theta_shapelet, 21.2 * kPi / 180.0);
+  s.mapping.model = withSensorNoise(s.mapping.model, NoiseRegime::classifiers());
   return s;
 }
 
@@ -301,8 +300,8 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: --robot: " << models.error().message << "\n";
     return 2;
   }
-  if (const std::string why = opt.mapping.sampler.validate(); !why.empty()) {
-    err << "crunchhost: sampler options: " << why << "\n";
+  if (auto st = opt.mapping.validate(); !st) {
+    err << "crunchhost: mapping options: " << st.error().message << "\n";
     return 2;
   }
   RobotSessionOptions sopt = sessionOptions(models.value(), opt.mapping, opt.seed);

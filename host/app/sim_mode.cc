@@ -22,13 +22,6 @@ namespace crunch::app {
 
 namespace {
 
-std::optional<NoiseRegime> noiseByName(const std::string& name) {
-  if (name == "ideal") return NoiseRegime::ideal();
-  if (name == "realistic") return NoiseRegime::realistic();
-  if (name == "noisy") return NoiseRegime::noisy();
-  return std::nullopt;
-}
-
 nlohmann::ordered_json accuracyJson(const Evaluation& ev) {
   return {{"true_tables", ev.true_tables},
           {"fused_tables", ev.fused_tables},
@@ -165,23 +158,18 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
         << "' (expected physics, gaussian or ideal)\n";
     return 2;
   }
-  auto noise = noiseByName(opt.noise);
-  if (!noise) {
-    err << "crunchhost: --noise: unknown regime '" << opt.noise
-        << "' (expected ideal, realistic or noisy)\n";
+  auto named = noiseRegimeByName(opt.noise);
+  if (!named) {
+    err << "crunchhost: --" << named.error().message << "\n";
     return 2;
   }
+  std::optional<NoiseRegime> noise = named.value();
   if (opt.sensor_model == "ideal") noise = NoiseRegime::ideal();
-  // The blackboard's sensor sigmas (eq. 12) for the physics path: the paper's measured
-  // classifier errors (Table 1 all whiskers, Fig. 10), not an injected noise.
-  if (physics) noise = NoiseRegime{"physics", 0.00498, 21.2 * kPi / 180.0};
-  // The physics path has no injected noise: its noise is what its classifiers make (§4).
-  if (const std::string why = opt.mapping.sampler.validate(); !why.empty()) {
-    err << "crunchhost: sampler options: " << why << "\n";
-    return 2;
-  }
-  if (opt.mapping.working_memory < 1) {
-    err << "crunchhost: --working-memory must be >= 1\n";
+  // The physics path has no injected noise: its noise is what its classifiers make (§4), and
+  // the blackboard's sensor sigmas (eq. 12) are the paper's measured classifier errors.
+  if (physics) noise = NoiseRegime::classifiers();
+  if (auto st = opt.mapping.validate(); !st) {
+    err << "crunchhost: mapping options: " << st.error().message << "\n";
     return 2;
   }
 
@@ -217,9 +205,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
   SensorModel& sensor = physics ? static_cast<SensorModel&>(*physics_sensor) : ray_sensor;
   MappingOptions mopt = opt.mapping;
   mopt.seed = opt.seed;
-  // Eq. 12's sigma_r^S, sigma_theta^S "model sensor noise": never below the regime's own.
-  mopt.model.sigma_r_shapelet = std::max(mopt.model.sigma_r_shapelet, noise->sigma_r);
-  mopt.model.sigma_theta_shapelet = std::max(mopt.model.sigma_theta_shapelet, noise->sigma_phi);
+  mopt.model = withSensorNoise(mopt.model, *noise);
   ProgressBar bar(opt.json_progress ? out : err, opt.json_progress);
   mopt.progress = [&](int done, int total) { bar(done, total); };
   std::optional<BlackboardSnapshot> snap;
@@ -287,7 +273,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
       };
     }
   }
-  const Map map = runMapping(sensor, poses, skipped, mopt);
+  const Map map = runMapping(sensor, poses, skipped, mopt).value();  // validated above
   if (opt.snapshot_temperature && !snap) {
     err << "crunchhost: --snapshot " << *opt.snapshot_pose << ": pose " << *opt.snapshot_pose
         << " sensed nothing new and did not anneal, so there is no temperature to draw; "
@@ -305,7 +291,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     MappingOptions ref_opt = mopt;
     ref_opt.progress = nullptr;
     ref_opt.after_pose = nullptr;
-    const Map ref_map = runMapping(reference, poses, skipped, ref_opt);
+    const Map ref_map = runMapping(reference, poses, skipped, ref_opt).value();
     ps.gaussian = evaluate(ref_map, scene);
     ps.gaussian_s = ref_map.stats.wall_s;
     physics_summary = ps;

@@ -235,10 +235,9 @@ Result<Grid> buildGrid(const SweepOptions& opt, std::vector<std::string>& scene_
     auto names = splitList(opt.noise, "--noise");
     if (!names) return names.error();
     for (const std::string& n : names.value()) {
-      if (n == "ideal") g.noises.push_back(NoiseRegime::ideal());
-      else if (n == "realistic") g.noises.push_back(NoiseRegime::realistic());
-      else if (n == "noisy") g.noises.push_back(NoiseRegime::noisy());
-      else return Error{"--noise: unknown regime '" + n + "' (expected ideal, realistic or noisy)"};
+      auto regime = noiseRegimeByName(n);
+      if (!regime) return Error{"--" + regime.error().message};
+      g.noises.push_back(regime.value());
     }
   }
   if (!opt.noise_scale.empty()) {
@@ -275,14 +274,19 @@ Result<Grid> buildGrid(const SweepOptions& opt, std::vector<std::string>& scene_
   if (auto s = ints(opt.working_memory, "--working-memory", mapping_defaults.working_memory,
                     g.working_memory); !s)
     return s.error();
+  // Every grid point's settings through the library's own validation (one road in).
+  for (const NoiseRegime& n : g.noises)
+    if (auto s = n.validate(); !s) return Error{"--noise-scale " + n.name + ": " + s.error().message};
   for (const int steps : g.schedule_steps)
-    for (const int sw : g.sweeps) {
-      SamplerOptions so;
-      so.schedule_steps = steps;
-      so.sweeps_per_temperature = sw;
-      if (const std::string why = so.validate(); !why.empty())
-        return Error{"--schedule-steps/--sweeps: " + why};
-    }
+    for (const int sw : g.sweeps)
+      for (const int wm : g.working_memory) {
+        MappingOptions mo;
+        mo.sampler.schedule_steps = steps;
+        mo.sampler.sweeps_per_temperature = sw;
+        mo.working_memory = wm;
+        if (auto s = mo.validate(); !s)
+          return Error{"--schedule-steps/--sweeps/--working-memory: " + s.error().message};
+      }
 
   if (!opt.seeds.empty() && !opt.seed_list.empty())
     return Error{"--seeds and --seed-list: give one of them"};
@@ -365,9 +369,8 @@ Json runPoint(const Grid& g, const Point& p, size_t index, const std::string& sh
   mopt.sampler.sweeps_per_temperature = p.sweeps;
   mopt.working_memory = p.working_memory;
   // As sim_mode.cc: eq. 12's sigma_r^S, sigma_theta^S never below the regime's own noise.
-  mopt.model.sigma_r_shapelet = std::max(mopt.model.sigma_r_shapelet, noise.sigma_r);
-  mopt.model.sigma_theta_shapelet = std::max(mopt.model.sigma_theta_shapelet, noise.sigma_phi);
-  const Map map = runMapping(sensor, se.poses, se.skipped, mopt);
+  mopt.model = withSensorNoise(mopt.model, noise);
+  const Map map = runMapping(sensor, se.poses, se.skipped, mopt).value();  // grid validated
   const Evaluation ev = evaluate(map, se.scene);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   Json row;

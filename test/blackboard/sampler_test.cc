@@ -222,8 +222,8 @@ TEST_CASE("Sampler: pruning removes hypotheses whose shapelets left working memo
 
 TEST_CASE("Sampler: options validate themselves", "[blackboard]") {
   SamplerOptions o;
-  CHECK(o.validate().empty());
+  CHECK(o.validate().ok());
   o.r1 = 0.5;
   o.r2 = 0.2;
-  CHECK_FALSE(o.validate().empty());
+  CHECK_FALSE(o.validate().ok());
 }

@@ -146,7 +146,7 @@ TEST_CASE("Mapper: pose by pose gives exactly runMapping's map", "[mapping][mapp
       INFO("global_sweeps " << global << " seed " << seed);
       const MappingOptions o = options(seed, global);
       ScriptSensor sensor(script);
-      const Map expected = runMapping(sensor, script.poses, 0, o);
+      const Map expected = runMapping(sensor, script.poses, 0, o).value();
       REQUIRE(expected.stats.shapelets == static_cast<int>(script.poses.size()));
       REQUIRE_FALSE(expected.per_pose.empty());
 

@@ -44,7 +44,7 @@ TEST_CASE("Pipeline: non-finite and absurd reports are counted and never reach t
   ScriptedSensor sensor({report(0, nan, 0.0), report(1, 0.1, inf), report(2, 1.0, 0.0),
                          report(9, 0.1, 0.0), report(3, 0.12, 1.0)});
   const std::vector<Pose2> poses = {{1, 1, 0}, {1.5, 1, 0}, {2, 1, 0}};
-  const Map map = runMapping(sensor, poses, 0, {});
+  const Map map = runMapping(sensor, poses, 0, {}).value();
   CHECK(map.stats.rejected_reports == 4 * 3);  // NaN r, infinite phi, r = 7 lengths, bad index
   CHECK(map.stats.shapelets == 3);             // the one good report per pose
   for (const Shapelet& s : map.shapelets)
@@ -59,7 +59,7 @@ TEST_CASE("Pipeline: extreme noise gives a valid, possibly empty, map", "[mappin
   for (int i = 0; i < 40; ++i) poses.push_back({0.5 + 0.07 * i, 1.0 + 0.03 * i, 0.4 * i});
   MappingOptions opt;
   opt.global_chains = 2;
-  const Map map = runMapping(sensor, poses, 0, opt);
+  const Map map = runMapping(sensor, poses, 0, opt).value();
   CHECK(map.stats.poses == 40);
   for (const MapTable& t : map.tables) {
     CHECK((std::isfinite(t.pose.x) && std::isfinite(t.pose.y) && std::isfinite(t.pose.theta)));

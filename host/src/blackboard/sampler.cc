@@ -3,21 +3,29 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <sstream>
+
+#include "crunch/core/range_check.h"
 
 namespace crunch {
 
-std::string SamplerOptions::validate() const {
-  std::ostringstream why;
-  if (!(0.0 <= r1 && r1 <= r2 && r2 <= r3 && r3 <= 1.0)) why << "need 0 <= r1 <= r2 <= r3 <= 1; ";
-  if (schedule_steps < 1) why << "schedule_steps must be >= 1; ";
-  if (sweeps_per_temperature < 1) why << "sweeps_per_temperature must be >= 1; ";
-  if (!std::isfinite(schedule_log_top) || !std::isfinite(schedule_log_step))
-    why << "schedule must be finite; ";
-  if (!(prime_sigma_r >= 0 && prime_sigma_theta >= 0 && jitter_sigma_r >= 0 &&
-        jitter_sigma_theta >= 0))
-    why << "proposal spreads must be >= 0; ";
-  return why.str();
+Status SamplerOptions::validate() const {
+  const Status checks[] = {
+      checkCount("schedule_steps", schedule_steps, 1, 1000),
+      checkCount("sweeps_per_temperature", sweeps_per_temperature, 1, 1000),
+      checkRange("schedule_log_top", schedule_log_top, -50.0, 50.0),
+      checkRange("schedule_log_step", schedule_log_step, 0.0, 10.0),
+      checkRange("r1", r1, 0.0, 1.0),
+      checkRange("r2", r2, r1, 1.0),
+      checkRange("r3", r3, r2, 1.0),
+      checkRange("prime_sigma_r", prime_sigma_r, 0.0, 1.0),
+      checkRange("prime_sigma_theta", prime_sigma_theta, 0.0, kPi),
+      checkRange("jitter_sigma_r", jitter_sigma_r, 0.0, 1.0),
+      checkRange("jitter_sigma_theta", jitter_sigma_theta, 0.0, kPi),
+      checkRange("smart_parent_gain", smart_parent_gain, 0.0, 1e6)};
+  for (const Status& s : checks) {
+    if (!s) return s;
+  }
+  return okStatus();
 }
 
 Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)

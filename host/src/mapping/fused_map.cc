@@ -1,9 +1,22 @@
 #include "crunch/mapping/fused_map.h"
 
+#include "crunch/core/range_check.h"
+
 #include <algorithm>
 #include <cmath>
 
 namespace crunch {
+
+Status FuseOptions::validate() const {
+  const Status checks[] = {checkAbove("radius", radius, 0.0, 10.0),
+                           checkAbove("angle", angle, 0.0, kPi),
+                           checkCount("min_support", min_support, 1, 1000000),
+                           checkAbove("reach", reach, 0.0, 10.0)};
+  for (const Status& s : checks) {
+    if (!s) return s;
+  }
+  return okStatus();
+}
 
 namespace {
 struct Item {

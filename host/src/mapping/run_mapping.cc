@@ -24,8 +24,9 @@ std::pair<Vec2, Vec2> reachOf(const std::vector<Pose2>& poses, const std::vector
 
 }  // namespace
 
-Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
-               const MappingOptions& options) {
+Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
+                       const MappingOptions& options) {
+  if (auto s = options.validate(); !s) return s.error();
   Rng sense_rng(options.seed);
   const auto [lo, hi] = reachOf(poses, sensor.mounts());
   Mapper mapper(sensor.mounts(), lo, hi, options);

@@ -2,20 +2,41 @@
 
 #include <utility>
 
+#include "crunch/core/range_check.h"
+
 namespace crunch::session {
 
 namespace {
 constexpr std::size_t kPoseHistory = 1u << 16;  // 32.8 s of samples: more than an episode
 }  // namespace
 
+Status RobotSessionOptions::validate() const {
+  if (mounts.size() != static_cast<std::size_t>(signal::kWhiskers)) {
+    return Error{"mounts: the whisker array must have " + std::to_string(signal::kWhiskers) +
+                 " whiskers, has " + std::to_string(mounts.size())};
+  }
+  if (auto s = within("pipeline", pipeline.validate()); !s) return s;
+  if (pipeline.max_episode_samples >= static_cast<std::int64_t>(kPoseHistory)) {
+    return Error{"pipeline: max_episode_samples: must be below the pose history of " +
+                 std::to_string(kPoseHistory) + " samples"};
+  }
+  if (auto s = within("mapping", mapping.validate()); !s) return s;
+  const Status checks[] = {
+      checkRange("start.x", start.x, -1e3, 1e3),
+      checkRange("start.y", start.y, -1e3, 1e3),
+      checkRange("start.theta", start.theta, -1e3, 1e3),
+      checkRange("area.lo.x", area_lo.x(), -1e3, 1e3),
+      checkRange("area.lo.y", area_lo.y(), -1e3, 1e3),
+      checkRange("area width (area.hi.x - area.lo.x)", area_hi.x() - area_lo.x(), 0.5, kMaxAreaSide),
+      checkRange("area depth (area.hi.y - area.lo.y)", area_hi.y() - area_lo.y(), 0.5, kMaxAreaSide)};
+  for (const Status& s : checks) {
+    if (!s) return s;
+  }
+  return okStatus();
+}
+
 Result<std::unique_ptr<RobotSession>> RobotSession::create(const RobotSessionOptions& options) {
-  if (options.mounts.size() != static_cast<std::size_t>(signal::kWhiskers)) {
-    return Error{"robot: the whisker array must have " + std::to_string(signal::kWhiskers) +
-                 " whiskers, has " + std::to_string(options.mounts.size())};
-  }
-  if (options.pipeline.max_episode_samples >= static_cast<std::int64_t>(kPoseHistory)) {
-    return Error{"robot: max_episode_samples exceeds the pose history"};
-  }
+  if (auto s = options.validate(); !s) return s.error();
   auto pipeline = signal::SignalPipeline::create(options.pipeline);
   if (!pipeline) return pipeline.error();
   if (auto s = pipeline.value().setModels(options.models); !s) return s.error();

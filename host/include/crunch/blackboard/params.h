@@ -4,6 +4,7 @@
 #pragma once
 
 #include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
 
 namespace crunch {
 
@@ -46,6 +47,13 @@ struct ModelParams {
   double p_miss = 0.05;
   int free_pass_cap = 2;
   double free_margin = 0.015;
+
+  // The ranges: priors c_*, alpha_* and delta3 positive (at most 1e6); penalties eps_* in
+  // (0, 1]; spreads positive, at most 1 m or pi rad (sigma_w at most 1 m); the table 0.05..10 m
+  // each way with a leg side above 0 and below half its shorter side; link_sigmas 1..20;
+  // p_miss in (0, 1]; free_pass_cap 0..1000; free_margin 0..leg_side/2. okStatus(), or an
+  // Error naming the first bad field.
+  Status validate() const;
 
   // Offset of corner i's leg centre in the table frame (legs flush in the corners),
   // corner order (+x+y, -x+y, -x-y, +x-y).

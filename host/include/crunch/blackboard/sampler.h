@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "crunch/blackboard/blackboard.h"
+#include "crunch/core/result.h"
 #include "crunch/core/rng.h"
 
 namespace crunch {
@@ -60,8 +61,11 @@ struct SamplerOptions {
   // Empty by default.
   std::function<void(int step, double beta, const Blackboard& board)> after_temperature;
 
-  // Empty when valid, else what is wrong.
-  std::string validate() const;
+  // The ranges: schedule_steps and sweeps_per_temperature 1..1000 (a run's time grows with
+  // their product); schedule_log_top in [-50, 50] and schedule_log_step in [0, 10] (beta stays
+  // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
+  // smart_parent_gain 0..1e6. okStatus(), or an Error naming the first bad field.
+  Status validate() const;
 };
 
 struct SamplerStats {

@@ -22,6 +22,10 @@ struct FuseOptions {
   double angle = 10.0 * kPi / 180.0;  // radians, modulo pi
   int min_support = 3;                // per-pose MAPs that must agree
   double reach = 0.9;                 // metres: robot centres that could touch the table
+
+  // radius and reach above 0 and at most 10 m, angle above 0 and at most pi, min_support
+  // 1..1e6. okStatus(), or an Error naming the first bad field.
+  Status validate() const;
 };
 
 std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const FuseOptions& opt);

@@ -34,6 +34,13 @@ struct MappingOptions {
   // left it) and const access to the blackboard at the end of that annealing (its coldest
   // temperature, so its live tables are MAP_t). Empty by default: nothing is called or copied.
   std::function<void(int, const Pose2&, bool, const Blackboard&)> after_pose;
+
+  // Every setting of the run: model.validate(), sampler.validate(), fuse.validate() (their
+  // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
+  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256.
+  // okStatus(), or an Error naming the first bad field. runMapping and session::RobotSession
+  // call it; a Mapper must be given valid options.
+  Status validate() const;
 };
 
 }  // namespace crunch

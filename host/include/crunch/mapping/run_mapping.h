@@ -15,7 +15,8 @@ namespace crunch {
 // `skipped` says how many were dropped). Deterministic for a given seed: sensor noise and the
 // sampler draw from separate streams, so sampler settings do not change the sensed data.
 // Inference runs at poses that sensed at least one new shapelet; per_pose lists those poses.
-Map runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
+// An Error (nothing sensed) when options.validate() fails.
+Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
                const MappingOptions& options);
 
 }  // namespace crunch

@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "crunch/blackboard/params.h"
 #include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
 #include "crunch/core/rng.h"
 #include "crunch/blackboard/free_space.h"
 #include "crunch/robot/shapelet.h"
@@ -22,7 +24,22 @@ struct NoiseRegime {
   static NoiseRegime ideal() { return {"ideal", 0.0, 0.0}; }
   static NoiseRegime realistic() { return {"realistic", 0.005, kPi / 32.0}; }
   static NoiseRegime noisy() { return {"noisy", 0.025, kPi / 8.0}; }
+  // Not injected: the errors the paper measured for its own classifiers (Table 1, all whiskers:
+  // sigma_r 4.98 mm; Fig. 10: 21.2 degrees), which the physics chain's reports carry. The
+  // blackboard's shapelet sigmas for the physics sensor and the real robot.
+  static NoiseRegime classifiers() { return {"physics", 0.00498, 21.2 * kPi / 180.0}; }
+
+  // sigma_r 0..1 m and sigma_phi 0..pi. okStatus(), or an Error naming the field.
+  Status validate() const;
 };
+
+// "ideal", "realistic" or "noisy" (ARCHITECTURE.md §4 --noise); an Error naming the word and
+// the choices otherwise.
+Result<NoiseRegime> noiseRegimeByName(const std::string& name);
+
+// Eq. 12's sigma_r^S, sigma_theta^S "model sensor noise": `model` with its shapelet sigmas
+// raised to the sensor's where they are smaller.
+ModelParams withSensorNoise(ModelParams model, const NoiseRegime& noise);
 
 class SensorModel {
  public:

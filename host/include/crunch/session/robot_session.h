@@ -56,7 +56,15 @@ struct RobotSessionOptions {
   Vec2 area_lo{0.0, 0.0};  // the region it maps (the negative-evidence grid's extent)
   Vec2 area_hi{6.0, 6.0};
   bool checksum_includes_header = true;  // the Create 1's checksum quirk (io/create_oi.h)
+
+  // kWhiskers mounts; pipeline.validate() and mapping.validate() (errors prefixed "pipeline: ",
+  // "mapping: "); a finite start; an area with finite corners, 0.5..kMaxAreaSide m each way
+  // (the negative-evidence grid has a 1 cm cell: 50 m is 50 MB). okStatus(), or an Error naming
+  // the first bad field. RobotSession::create calls it.
+  Status validate() const;
 };
+
+inline constexpr double kMaxAreaSide = 50.0;  // metres
 
 struct RobotSessionCounts {
   std::uint64_t bridge_chunks = 0, create_chunks = 0, marks = 0;
