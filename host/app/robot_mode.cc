@@ -25,7 +25,6 @@
 #include "crunch/render/map_render.h"
 #include "crunch/scene/scene.h"
 #include "crunch/signal/models_io.h"
-#include "crunch_sim/training.h"
 #include "crunch/session/robot_session.h"
 
 namespace crunch::app {
@@ -91,15 +90,15 @@ json settingsJson(const RobotSessionOptions& s, std::uint64_t seed) {
             {"sigma_theta_shapelet", s.mapping.model.sigma_theta_shapelet}}}};
 }
 
-// The session's options for the physics-trained models: the pipeline they were trained with
-// (sim/training.h, physicsRigOptions; docs/TRAINING.md) and eq. 12's shapelet sigmas set to the
+// The session's options for the models: the pipeline they were trained with (carried in the
+// models file; docs/TRAINING.md) and eq. 12's shapelet sigmas set to the
 // classifiers' measured errors (paper Table 1 all whiskers, Fig. 10), as `--sim --sensor-model
 // physics` does.
 RobotSessionOptions sessionOptions(const signal::SignalModels& models, const MappingOptions& m,
                                    std::uint64_t seed) {
   RobotSessionOptions s;
   s.models = models;
-  s.pipeline = sim::physicsRigOptions(seed).pipeline;
+  s.pipeline = models.pipeline;  // the settings the models were trained with
   s.mounts = defaultWhiskerArray();
   s.mapping = m;
   s.mapping.seed = seed;

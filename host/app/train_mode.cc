@@ -594,6 +594,7 @@ int runTrain(const TrainOptions& opt, std::ostream& out, std::ostream& err) {
   signal::SignalModels models;
   models.radial = variants[static_cast<size_t>(saved)].fit.model;
   models.orientation = std::move(templates).value();
+  models.pipeline = proto.rig.pipeline;  // what the models were trained with travels with them
   if (auto s = signal::validateModels(models); !s) {
     err << "crunchhost train: the fitted models are not valid: " << s.error().message << "\n";
     return 1;

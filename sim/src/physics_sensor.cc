@@ -68,7 +68,11 @@ Result<std::unique_ptr<PhysicsSensorModel>> PhysicsSensorModel::create(
     return Error{"physics sensor: no pose of the scene leaves every whisker clear of walls and "
                  "legs, so the whisker sensors cannot calibrate at rest; add a clear pose"};
   }
-  auto rig = WhiskerRig::create(world, mounts, *start, options.rig);
+  // The pipeline the models were trained with (carried in the models file), whatever the rig
+  // options say: the radial lines and templates are valid only for those settings.
+  WhiskerRig::Options rig_options = options.rig;
+  rig_options.pipeline = models.pipeline;
+  auto rig = WhiskerRig::create(world, mounts, *start, rig_options);
   if (!rig) return rig.error();
   if (auto s = rig.value()->pipeline().setModels(models); !s) return s.error();
   auto model = std::unique_ptr<PhysicsSensorModel>(

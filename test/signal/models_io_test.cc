@@ -90,7 +90,56 @@ TEST_CASE("Models file: round trip is bit-exact", "[signal]") {
   }
   const Json doc = Json::parse(modelsToJson(m));
   CHECK(doc["format"] == "crunchbot-signal-models");
-  CHECK(doc["version"] == 1);
+  CHECK(doc["version"] == 2);
+  CHECK(b.pipeline.detector.min_onset_threshold == m.pipeline.detector.min_onset_threshold);
+}
+
+TEST_CASE("Models file: the pipeline settings travel with the models", "[signal]") {
+  SignalModels m = sampleModels();
+  m.pipeline.detector.min_onset_threshold = 0.0123;
+  m.pipeline.detector.smoothing.moving_average = 7;
+  m.pipeline.detector.accept_dropped = true;
+  m.pipeline.window = {140, 20};
+  m.pipeline.max_episode_samples = 9000;
+  m.pipeline.max_held_fraction = 0.25;
+  auto back = parseModelsJson(modelsToJson(m), "m.json");
+  REQUIRE(back.ok());
+  const PipelineOptions& p = back.value().pipeline;
+  CHECK(p.detector.min_onset_threshold == 0.0123);
+  CHECK(p.detector.smoothing.moving_average == 7);
+  CHECK(p.detector.accept_dropped);
+  CHECK(p.window.samples == 140);
+  CHECK(p.window.decimation == 20);
+  CHECK(p.max_episode_samples == 9000);
+  CHECK(p.max_held_fraction == 0.25);
+  // A bad setting is named by its path in the file.
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["detector"]["onset_sigmas"] = -1.0; }),
+             Catch::Contains("models.json: pipeline.detector.onset_sigmas"));
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["window"]["samples"] = 100000000; }),
+             Catch::Contains("pipeline.window.samples"));
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"].erase("max_held_fraction"); }),
+             Catch::Contains("pipeline.max_held_fraction: missing"));
+  CHECK_THAT(errorFor([](Json& d) { d.erase("pipeline"); }), Catch::Contains("pipeline: missing"));
+}
+
+TEST_CASE("Models file: a version-1 file reads with the pipeline it was trained with",
+          "[signal]") {
+  // Version 1 had no "pipeline": every such file was trained with the defaults and an onset
+  // threshold of kVersion1OnsetThreshold.
+  Json doc = Json::parse(modelsToJson(sampleModels()));
+  doc["version"] = 1;
+  doc.erase("pipeline");
+  auto v1 = parseModelsJson(doc.dump(), "v1.json");
+  REQUIRE(v1.ok());
+  PipelineOptions expected;
+  expected.detector.min_onset_threshold = kVersion1OnsetThreshold;
+  CHECK(v1.value().pipeline.detector.min_onset_threshold == kVersion1OnsetThreshold);
+  CHECK(v1.value().pipeline.window.samples == expected.window.samples);
+  CHECK(v1.value().pipeline.max_episode_samples == expected.max_episode_samples);
+  // ... and a version-1 file with a "pipeline" is not one.
+  doc["pipeline"] = Json::parse(modelsToJson(sampleModels()))["pipeline"];
+  CHECK_THAT(parseModelsJson(doc.dump(), "v1.json").error().message,
+             Catch::Contains("pipeline: unknown key"));
 }
 
 TEST_CASE("Models file: a missing, unreadable or malformed file names the file", "[signal]") {
@@ -123,13 +172,13 @@ TEST_CASE("Models file: a missing, unreadable or malformed file names the file",
 
 TEST_CASE("Models file: wrong format or version is refused first", "[signal]") {
   CHECK(errorFor([](Json&) {}) == "(ok)");
-  CHECK_THAT(errorFor([](Json& d) { d["version"] = 2; }),
-             Catch::Contains("models.json: version: unsupported version 2"));
+  CHECK_THAT(errorFor([](Json& d) { d["version"] = 3; }),
+             Catch::Contains("models.json: version: unsupported version 3"));
   CHECK_THAT(errorFor([](Json& d) { d["version"] = "1"; }), Catch::Contains("version"));
   CHECK_THAT(errorFor([](Json& d) { d.erase("version"); }), Catch::Contains("version: missing"));
-  // Version is checked before the rest: a v2 file with other fields is reported as v2.
+  // Version is checked before the rest: a v3 file with other fields is reported as v3.
   CHECK_THAT(errorFor([](Json& d) {
-               d["version"] = 2;
+               d["version"] = 3;
                d.erase("radial");
              }),
              Catch::Contains("unsupported version"));

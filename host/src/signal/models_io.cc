@@ -57,8 +57,40 @@ Status validateModels(const SignalModels& models) {
     }
     if (!t.mean.allFinite()) return Error{member(templatePath(k), "data") + ": not finite"};
   }
+  if (Status s = models.pipeline.validate(); !s.ok()) {
+    return Error{"pipeline." + s.error().message};
+  }
   return okStatus();
 }
+
+namespace {
+
+OrderedJson pipelineJson(const PipelineOptions& p) {
+  const ContactDetectorOptions& d = p.detector;
+  const SmoothingFilter::Options& f = d.smoothing;
+  return {{"detector",
+           {{"radians_per_code", d.radians_per_code},
+            {"smoothing",
+             {{"order", f.low_pass.order},
+              {"cutoff_hz", f.low_pass.cutoff_hz},
+              {"sample_rate_hz", f.low_pass.sample_rate_hz},
+              {"moving_average", f.moving_average}}},
+            {"settle_samples", d.settle_samples},
+            {"calibration_samples", d.calibration_samples},
+            {"max_noise_sigma", d.max_noise_sigma},
+            {"onset_sigmas", d.onset_sigmas},
+            {"release_sigmas", d.release_sigmas},
+            {"min_onset_threshold", d.min_onset_threshold},
+            {"release_samples", d.release_samples},
+            {"baseline_time_constant_s", d.baseline_time_constant_s},
+            {"max_held_samples", d.max_held_samples},
+            {"accept_dropped", d.accept_dropped}}},
+          {"window", {{"samples", p.window.samples}, {"decimation", p.window.decimation}}},
+          {"max_episode_samples", p.max_episode_samples},
+          {"max_held_fraction", p.max_held_fraction}};
+}
+
+}  // namespace
 
 std::string modelsToJson(const SignalModels& models) {
   assert(validateModels(models).ok());
@@ -93,7 +125,8 @@ std::string modelsToJson(const SignalModels& models) {
                             {{"channels", kChannels},
                              {"decimation", models.orientation.decimation},
                              {"columns", models.orientation.columns},
-                             {"templates", std::move(templates)}}}};
+                             {"templates", std::move(templates)}}},
+                           {"pipeline", pipelineJson(models.pipeline)}};
   // Templates are long rows of numbers: no indentation keeps the file compact; nlohmann writes
   // doubles with enough digits to read back bit-exact.
   return doc.dump() + "\n";
@@ -199,21 +232,94 @@ OrientationModel parseOrientation(const Json& j) {
   return m;
 }
 
+bool boolean(const Json& obj, const std::string& path, std::string_view key) {
+  const Json& j = required(obj, path, key);
+  if (!j.is_boolean()) fail(member(path, key), "expected true or false, got " + j.dump());
+  return j.get<bool>();
+}
+
+PipelineOptions parsePipeline(const Json& j) {
+  const std::string path = "pipeline";
+  expectObject(j, path, {"detector", "window", "max_episode_samples", "max_held_fraction"});
+  PipelineOptions p;
+  const std::string dp = "pipeline.detector";
+  const Json& d = required(j, path, "detector");
+  expectObject(d, dp, {"radians_per_code", "smoothing", "settle_samples", "calibration_samples",
+                       "max_noise_sigma", "onset_sigmas", "release_sigmas",
+                       "min_onset_threshold", "release_samples", "baseline_time_constant_s",
+                       "max_held_samples", "accept_dropped"});
+  ContactDetectorOptions& o = p.detector;
+  o.radians_per_code = requiredNumber(d, dp, "radians_per_code");
+  const std::string sp = "pipeline.detector.smoothing";
+  const Json& sm = required(d, dp, "smoothing");
+  expectObject(sm, sp, {"order", "cutoff_hz", "sample_rate_hz", "moving_average"});
+  o.smoothing.low_pass.order = count(required(sm, sp, "order"), member(sp, "order"), 64);
+  o.smoothing.low_pass.cutoff_hz = requiredNumber(sm, sp, "cutoff_hz");
+  o.smoothing.low_pass.sample_rate_hz = requiredNumber(sm, sp, "sample_rate_hz");
+  o.smoothing.moving_average =
+      count(required(sm, sp, "moving_average"), member(sp, "moving_average"), 1 << 16);
+  // Counts of samples: at most 10 minutes at 2 kHz, so a corrupt file cannot ask for gigabytes.
+  constexpr int kMaxSamples = 1200000;
+  o.settle_samples = count(required(d, dp, "settle_samples"), member(dp, "settle_samples"),
+                           kMaxSamples);
+  o.calibration_samples = count(required(d, dp, "calibration_samples"),
+                                member(dp, "calibration_samples"), kMaxSamples);
+  o.max_noise_sigma = requiredNumber(d, dp, "max_noise_sigma");
+  o.onset_sigmas = requiredNumber(d, dp, "onset_sigmas");
+  o.release_sigmas = requiredNumber(d, dp, "release_sigmas");
+  o.min_onset_threshold = requiredNumber(d, dp, "min_onset_threshold");
+  o.release_samples = count(required(d, dp, "release_samples"), member(dp, "release_samples"),
+                            kMaxSamples);
+  o.baseline_time_constant_s = requiredNumber(d, dp, "baseline_time_constant_s");
+  o.max_held_samples = count(required(d, dp, "max_held_samples"), member(dp, "max_held_samples"),
+                             kMaxSamples);
+  o.accept_dropped = boolean(d, dp, "accept_dropped");
+  const std::string wp = "pipeline.window";
+  const Json& w = required(j, path, "window");
+  expectObject(w, wp, {"samples", "decimation"});
+  p.window.samples = count(required(w, wp, "samples"), member(wp, "samples"), kMaxSamples);
+  p.window.decimation = count(required(w, wp, "decimation"), member(wp, "decimation"), kMaxSamples);
+  p.max_episode_samples = count(required(j, path, "max_episode_samples"),
+                                member(path, "max_episode_samples"), kMaxSamples);
+  p.max_held_fraction = requiredNumber(j, path, "max_held_fraction");
+  return p;
+}
+
+// What a version-1 file's models were trained with (models_io.h).
+PipelineOptions version1Pipeline() {
+  PipelineOptions p;
+  p.detector.min_onset_threshold = kVersion1OnsetThreshold;
+  return p;
+}
+
 SignalModels parseDocument(const Json& doc) {
-  expectObject(doc, "", {"format", "version", "radial", "orientation"});
+  expectObject(doc, "");
   const Json& format = required(doc, "", "format");
   if (!format.is_string() || format.get<std::string>() != kModelsFormat) {
     fail("format", std::string("expected \"") + kModelsFormat + "\", got " + format.dump());
   }
   // The version first: another version may lay out everything else differently.
   const Json& version = required(doc, "", "version");
-  if (!version.is_number_integer() || version.get<std::int64_t>() != kModelsVersion) {
-    fail("version", "unsupported version " + version.dump() + " (this build reads version " +
+  if (!version.is_number_integer() ||
+      (version.get<std::int64_t>() != 1 && version.get<std::int64_t>() != kModelsVersion)) {
+    fail("version", "unsupported version " + version.dump() + " (this build reads versions 1 and " +
                         std::to_string(kModelsVersion) + ")");
+  }
+  const bool v1 = version.get<std::int64_t>() == 1;
+  if (v1) {
+    expectObject(doc, "", {"format", "version", "radial", "orientation"});
+  } else {
+    expectObject(doc, "", {"format", "version", "radial", "orientation", "pipeline"});
   }
   SignalModels models;
   models.radial = parseRadial(required(doc, "", "radial"));
   models.orientation = parseOrientation(required(doc, "", "orientation"));
+  models.pipeline = v1 ? version1Pipeline() : parsePipeline(required(doc, "", "pipeline"));
+  if (Status s = validateModels(models); !s.ok()) {
+    const std::string& msg = s.error().message;
+    const size_t colon = msg.find(": ");
+    fail(msg.substr(0, colon), colon == std::string::npos ? "invalid" : msg.substr(colon + 2));
+  }
   return models;
 }
 

@@ -12,6 +12,10 @@ Status PipelineOptions::validate() const {
     return Error{"max_episode_samples: expected at least window.samples (" +
                  std::to_string(window.samples) + "), got " + std::to_string(max_episode_samples)};
   }
+  if (max_episode_samples > 1200000) {
+    return Error{"max_episode_samples: expected at most 1200000 (10 minutes), got " +
+                 std::to_string(max_episode_samples)};
+  }
   if (!(max_held_fraction >= 0.0 && max_held_fraction <= 1.0)) {
     return Error{"max_held_fraction: expected a number in [0, 1]"};
   }

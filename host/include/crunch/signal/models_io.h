@@ -1,12 +1,25 @@
-// The signal models file: the radial-distance lines (eq. 2) and the orientation templates
-// (eq. 3) in one JSON document (docs/SIGNAL.md, "Models file").
+// The signal models file: the radial-distance lines (eq. 2), the orientation templates (eq. 3)
+// and the signal-pipeline settings they were trained with, in one JSON document (docs/SIGNAL.md,
+// "Models file").
 //
-//   {"format": "crunchbot-signal-models", "version": 1,
+//   {"format": "crunchbot-signal-models", "version": 2,
 //    "radial": {"external_length": 0.14, "tip_zone": 0.05,
 //               "whiskers": [{"a1": .., "a0": .., "sigma": .., "samples": n,
 //                             "f1_min": .., "f1_max": .., "r_min": .., "r_max": ..} x 4]},
 //    "orientation": {"channels": 8, "decimation": 20, "columns": 200,
-//                    "templates": [{"angle": rad, "windows": n, "data": [[columns] x 8]} ...]}}
+//                    "templates": [{"angle": rad, "windows": n, "data": [[columns] x 8]} ...]},
+//    "pipeline": {"detector": {"radians_per_code": .., "smoothing": {"order": n, "cutoff_hz": ..,
+//                              "sample_rate_hz": .., "moving_average": n}, "settle_samples": n,
+//                              "calibration_samples": n, "max_noise_sigma": .., "onset_sigmas": ..,
+//                              "release_sigmas": .., "min_onset_threshold": ..,
+//                              "release_samples": n, "baseline_time_constant_s": ..,
+//                              "max_held_samples": n, "accept_dropped": bool},
+//                 "window": {"samples": n, "decimation": n},
+//                 "max_episode_samples": n, "max_held_fraction": ..}}
+//
+// Version 1 files (no "pipeline") are still read: every one was written by `crunchhost train`
+// with the pipeline's defaults and an onset threshold of kVersion1OnsetThreshold, which is what
+// reading one gives. Files are written as version 2.
 //
 // Reading is strict: every field required, unknown keys refused, numbers finite, counts
 // non-negative integers, sizes as declared. Every failure is an Error "<file>: <field path>:
@@ -18,20 +31,27 @@
 
 #include "crunch/core/result.h"
 #include "crunch/signal/orientation_templates.h"
+#include "crunch/signal/pipeline_options.h"
 #include "crunch/signal/radial_distance.h"
 
 namespace crunch::signal {
 
 inline constexpr const char* kModelsFormat = "crunchbot-signal-models";
-inline constexpr int kModelsVersion = 1;
+inline constexpr int kModelsVersion = 2;
+// The detector's onset threshold of every version-1 file's training rig (radians).
+inline constexpr double kVersion1OnsetThreshold = 0.008;
 
 struct SignalModels {
   RadialModel radial;
   OrientationModel orientation;
+  // The settings the models were trained with: whoever runs the models runs the pipeline so.
+  PipelineOptions pipeline;
 };
 
 // okStatus(), or an Error naming the field (as in the file) that could not be written or read
-// back: non-finite numbers, radial options out of range, an empty or ragged orientation model.
+// back: non-finite numbers, radial options out of range, an empty or ragged orientation model,
+// pipeline settings that PipelineOptions::validate() refuses. (Whether the templates fit a
+// pipeline's window is SignalPipeline::setModels' check.)
 Status validateModels(const SignalModels& models);
 
 // The document's text. Asserts validateModels(models).

@@ -38,20 +38,11 @@
 #include "crunch/core/result.h"
 #include "crunch/signal/contact_detector.h"
 #include "crunch/signal/models_io.h"
+#include "crunch/signal/pipeline_options.h"
 #include "crunch/signal/window.h"
 
 namespace crunch::signal {
 
-struct PipelineOptions {
-  ContactDetectorOptions detector;
-  WindowOptions window;
-  std::int64_t max_episode_samples = 20000;  // 10 s; at least window.samples
-  // An episode is reliable if no whisker was lost during it and every whisker held at most
-  // this fraction of its samples (sample.h: held samples are not measurements).
-  double max_held_fraction = 0.05;
-  // okStatus(), or an Error naming the bad field.
-  Status validate() const;
-};
 
 // One whisker's part in an episode. Sample indices are relative to the episode's start; times
 // refer to the smoothed signal (about 14 ms behind the raw one, filters.h).
