@@ -147,7 +147,14 @@ int main(int argc, char** argv) {
                      "charts, PNG and SVG, from DIR/sweep.json");
   sweep_chart->add_option("--in", chart_opt.in_dir, "directory holding sweep.json")->required();
   sweep_chart->add_option("--out", chart_opt.out_dir, "output directory (default: --in)");
-  CLI11_PARSE(app, argc, argv);
+  // The contract's exit codes (ARCHITECTURE.md §4): a command line CLI11 cannot parse is bad
+  // input, exit 2 (CLI11's own codes are 100 and up); --help and --version exit 0.
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
   if (*sweep || *sweep_merge || *sweep_chart) {
     if (sim || robot || !replay.empty()) {
       std::cerr << "crunchhost: sweep is a mode of its own: drop --sim/--robot/--replay\n";
