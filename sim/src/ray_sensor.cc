@@ -7,14 +7,6 @@
 namespace crunch::sim {
 namespace {
 
-// An orientation modulo pi, as a value in [0, pi).
-double wrapHalfTurn(double a) {
-  double w = wrapPeriod(a, kPi);
-  if (w < 0.0) w += kPi;
-  if (w >= kPi) w -= kPi;  // -tiny + pi can round up to pi
-  return w;
-}
-
 [[maybe_unused]] bool validSigma(double s) { return std::isfinite(s) && s >= 0.0; }
 
 }  // namespace

@@ -35,6 +35,17 @@ struct Case {
   const char* named;  // what the message must name
 };
 
+// `crunchhost MODE --out DIR ARGS` is refused: exit 2, the setting named, DIR not created.
+void expectRefused(const std::string& mode, const Case& c) {
+  TempDir dir;
+  const std::string out = dir.file("out");
+  const Run r = run(mode + " --out " + out + " " + c.args);
+  INFO(mode << " " << c.args << "\n" << r.output);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains(c.named));
+  CHECK_FALSE(std::filesystem::exists(out));
+}
+
 }  // namespace
 
 TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, nothing written",
@@ -51,13 +62,7 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
                           Case{"--smart-gain nan", "smart_parent_gain"},
                           Case{"--smart-gain -100", "smart_parent_gain"},
                           Case{"--noise bogus", "noise"});
-  TempDir dir;
-  const std::string out = dir.file("out");
-  const Run r = run("--sim --out " + out + " " + c.args);
-  INFO(c.args << "\n" << r.output);
-  CHECK(r.exit_code == 2);
-  CHECK_THAT(r.output, Catch::Contains(c.named));
-  CHECK_FALSE(std::filesystem::exists(out));
+  expectRefused("--sim", c);
 }
 
 TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing written",
@@ -69,11 +74,5 @@ TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing writt
                           Case{"--sweeps 0", "sweeps"},
                           Case{"--noise realistic,bogus", "bogus"},
                           Case{"--noise-scale 1,1e9", "sigma_r"});
-  TempDir dir;
-  const std::string out = dir.file("out");
-  const Run r = run("sweep --out " + out + " " + c.args);
-  INFO(c.args << "\n" << r.output);
-  CHECK(r.exit_code == 2);
-  CHECK_THAT(r.output, Catch::Contains(c.named));
-  CHECK_FALSE(std::filesystem::exists(out));
+  expectRefused("sweep", c);
 }

@@ -6,14 +6,6 @@
 namespace crunch {
 namespace {
 
-// An orientation modulo pi, as a value in [0, pi).
-double wrapHalfTurn(double a) {
-  double w = wrapPeriod(a, kPi);
-  if (w < 0.0) w += kPi;
-  if (w >= kPi) w -= kPi;  // -tiny + pi can round up to pi
-  return w;
-}
-
 bool finite(const Pose2& p) {
   return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.theta);
 }

@@ -55,6 +55,14 @@ inline double wrapPeriod(double a, double period) {
   return a - 0.5 * period;
 }
 
+// An orientation modulo pi (a line's, a surface's), as a value in [0, pi).
+inline double wrapHalfTurn(double a) {
+  double w = wrapPeriod(a, kPi);
+  if (w < 0.0) w += kPi;
+  if (w >= kPi) w -= kPi;  // -tiny + pi can round up to pi
+  return w;
+}
+
 // An oriented rectangle: centre pose and full side lengths along its own x and y.
 struct OrientedRect {
   Pose2 pose;
