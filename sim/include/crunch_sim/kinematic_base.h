@@ -9,9 +9,10 @@
 // Options::max_wheel_acceleration if set (0, the default: at once); non-finite input stops the
 // base and returns an Error (until issue 11 it stopped and returned ok). step(dt) advances the
 // clock by dt, ramps the wheels over dt, and moves the body along the exact arc of the wheel
-// speeds then in effect; if the new pose collides, the move is refused (the body stays put) and bumped()
-// turns true; it turns false again at the next step that moves the body. odometry() is the true
-// pose (this base has no wheel slip).
+// speeds then in effect; if the new pose collides, the move is refused (the body stays put) and
+// bumped() turns true; it turns false again at the next step that moves the body. odometry() is
+// the true pose (this base has no wheel slip). The options must be valid
+// (DiffDrive::Options::validate; asserted).
 // Thread-safety: none. Allocation: none after construction.
 #pragma once
 

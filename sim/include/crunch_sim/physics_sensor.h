@@ -10,11 +10,11 @@
 // `crunchhost --robot` runs, with the simulator's exact pose as its pose source (§2.8); sense()
 // opens a whisk on it where the robot's control loop writes the whisk-start mark, and closes it
 // when the whisk's last episode has ended. One whisk may give several contact episodes (the
-// whisker meets the object on the toward and on the return pass); each whisker reports at most once per whisk, from the first
-// episode in which it touched: its f1 is the peak of that first pass (eq. 1), as the shipped
-// models were trained (`crunchhost train --radial-f1 first`; docs/TRAINING.md: the return pass
-// can meet a thin object's far side and peak higher, which made the radial error 5.5 mm
-// instead of 1.9 mm):
+// whisker meets the object on the toward and on the return pass); each whisker reports at most
+// once per whisk, from the first episode in which it touched: its f1 is the peak of that first
+// pass (eq. 1), as the shipped models were trained (`crunchhost train --radial-f1 first`;
+// docs/TRAINING.md: the return pass can meet a thin object's far side and peak higher, which
+// made the radial error 5.5 mm instead of 1.9 mm):
 //   r     the radial model's estimate (eq. 2), clamped to [0, external length];
 //   phi   the orientation template's angle (eq. 3), which is relative to the heading at the
 //         episode's first contact, turned into the frame of the robot at this whisker's peak;
