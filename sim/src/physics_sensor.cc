@@ -74,7 +74,7 @@ Result<std::unique_ptr<PhysicsSensorModel>> PhysicsSensorModel::create(
   rig_options.pipeline = models.pipeline;
   auto rig = WhiskerRig::create(world, mounts, *start, rig_options);
   if (!rig) return rig.error();
-  if (auto s = rig.value()->pipeline().setModels(models); !s) return s.error();
+  if (auto s = rig.value()->chain().setModels(models); !s) return s.error();
   auto model = std::unique_ptr<PhysicsSensorModel>(
       new PhysicsSensorModel(std::move(rig).value(), std::move(mounts), options));
   model->clear_pose_ = *start;
@@ -86,17 +86,13 @@ PhysicsSensorModel::PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig,
     : rig_(std::move(rig)),
       mounts_(std::move(mounts)),
       options_(options),
-      evidence_(mounts_),
       scores_(mounts_.size()) {}
 
-void PhysicsSensorModel::takeEpisode(const signal::ContactEpisode& ep) {
-  ++errors_.episodes;
-  const std::uint32_t set =
-      evidence_.take(ep, [this](std::uint64_t i) { return rig_->poseAtSample(i); });
+void PhysicsSensorModel::score(std::uint32_t set) {
   const auto& truth = rig_->episodeTruth();
   for (std::size_t w = 0; w < mounts_.size(); ++w) {
     if (!(set & (1u << w))) continue;
-    const ContactReport& rep = evidence_.entry(static_cast<int>(w)).report;
+    const ContactReport& rep = rig_->chain().evidence().entry(static_cast<int>(w)).report;
     const WhiskerTruth& t = truth[w];
     Score& sc = scores_[w];
     sc = Score{};
@@ -110,18 +106,18 @@ void PhysicsSensorModel::takeEpisode(const signal::ContactEpisode& ep) {
 
 void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
                                std::vector<ContactReport>& out) {
-  evidence_.begin();
   for (Score& sc : scores_) sc = Score{};
   free_.clear();
   ++errors_.whisks;
 
+  session::SensingChain& chain = rig_->chain();
   WhiskeredRobot& robot = rig_->robot();
   const double t0 = robot.now();
   // A whisk that ended pressed against something leaves a detector in contact, and it cannot
   // open the next pose's episode until it releases: rest clear of everything first (bounded).
   if (rig_->contactMask() != 0 || rig_->pipeline().inEpisode()) {
     robot.place(clear_pose_);
-    for (int i = 0; i < kMaxRestSteps && (rig_->contactMask() != 0); ++i) rig_->step();
+    for (int i = 0; i < kMaxRestSteps && (rig_->contactMask() != 0); ++i) (void)rig_->step();
     if (rig_->pipeline().inEpisode()) (void)rig_->finish();
     rig_->resetTruth();
   }
@@ -130,30 +126,23 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   wopt.whisker_bearings.clear();
   for (const WhiskerMount& m : mounts_) wopt.whisker_bearings.push_back(m.bearing);
   BodyWhisk whisk(robot, wopt);
+  // As the robot's control loop marks it: the whisk's episodes are the ones reported.
+  chain.beginWhisk();
   (void)whisk.startInPlace(+1);  // the ray model's sweep: toward +A first
 
-  // The whisk, then until the last episode ends (bounded).
+  // The whisk, then until the last episode ends (bounded). Each episode the chain takes is
+  // scored against the truth of that episode (the whiskers it gave their first report).
   const long max_steps = static_cast<long>(
       (4.0 * wopt.whisk_amplitude / wopt.whisk_rate + 2.0 + options_.max_settle_s) /
       options_.rig.robot.dt);
-  long n = 0;
   bool whisking = true;
-  Pose2 free_pose = robot.odometry();  // the negative-evidence sample being accumulated
-  std::uint32_t free_mask = 0;
   double settle_until = 0.0;
-  for (; n < max_steps; ++n) {
-    if (const signal::ContactEpisode* ep = rig_->step()) takeEpisode(*ep);
-    const std::uint32_t mask = rig_->contactMask();
+  for (long n = 0; n < max_steps; ++n) {
+    const std::uint32_t before = chain.reportedMask();
+    if (rig_->step() != nullptr) score(chain.reportedMask() & ~before);
     if (whisking) {
-      (void)whisk.update(mask);
-      if (n % WhiskEvidence::kFreeEvery == 0) {
-        if (n > 0) evidence_.sample(free_pose, free_mask);
-        free_pose = robot.odometry();
-        free_mask = 0;
-      }
-      free_mask |= mask;
+      (void)whisk.update(rig_->contactMask());
       if (whisk.done()) {
-        evidence_.sample(free_pose, free_mask);
         whisking = false;
         settle_until = robot.now() + options_.max_settle_s;
       }
@@ -162,16 +151,18 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
     }
   }
   (void)robot.stop();
-  if (rig_->pipeline().inEpisode()) {
-    if (const signal::ContactEpisode* ep = rig_->finish()) takeEpisode(*ep);
+  {
+    const std::uint32_t before = chain.reportedMask();
+    if (rig_->finish() != nullptr) score(chain.reportedMask() & ~before);
   }
   rig_->resetTruth();
   errors_.simulated_s += robot.now() - t0;
 
   const std::size_t first = out.size();
-  evidence_.end(out, free_);
-  errors_.no_radial = evidence_.counts().no_radial;
-  errors_.no_orientation = evidence_.counts().no_orientation;
+  chain.endWhisk(out, free_);
+  errors_.episodes = static_cast<int>(chain.counts().episodes);
+  errors_.no_radial = chain.evidence().counts().no_radial;
+  errors_.no_orientation = chain.evidence().counts().no_orientation;
   for (std::size_t k = first; k < out.size(); ++k) {
     const Score& sc = scores_[static_cast<std::size_t>(out[k].whisker)];
     if (sc.scored) {

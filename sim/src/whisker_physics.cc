@@ -241,7 +241,11 @@ Result<std::unique_ptr<WhiskeredRobot>> WhiskeredRobot::create(const World& worl
 
 WhiskeredRobot::WhiskeredRobot(const World& world, std::vector<WhiskerMount> mounts,
                                const Options& options)
-    : world_(world), mounts_(std::move(mounts)), options_(options) {}
+    : world_(world),
+      mounts_(std::move(mounts)),
+      options_(options),
+      wheels_(DiffDrive::Options{options.wheel_base, options.max_wheel_speed,
+                                 options.max_wheel_acceleration}) {}
 
 WhiskeredRobot::~WhiskeredRobot() {
   // Contact joints reference the bodies; empty the group while everything still exists.
@@ -385,26 +389,13 @@ void WhiskeredRobot::resetWhiskers() {
 void WhiskeredRobot::place(const Pose2& pose) {
   assert(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta));
   pose_ = pose;
-  v_ = omega_ = left_ = right_ = target_left_ = target_right_ = 0.0;
+  wheels_.halt();
   resetWhiskers();
   bumped_ = world_.bodyCollides(pose_);
 }
 
 Status WhiskeredRobot::drive(double v, double omega) {
-  if (!std::isfinite(v) || !std::isfinite(omega)) {
-    return Error{"simulated base: drive(v, omega) needs finite values"};
-  }
-  const double half = 0.5 * options_.wheel_base;
-  const double lim = options_.max_wheel_speed;
-  target_left_ = std::clamp(v - omega * half, -lim, lim);
-  target_right_ = std::clamp(v + omega * half, -lim, lim);
-  if (options_.max_wheel_acceleration <= 0.0) {  // the wheels take the new speed at once
-    left_ = target_left_;
-    right_ = target_right_;
-    v_ = 0.5 * (left_ + right_);
-    omega_ = (right_ - left_) / options_.wheel_base;
-  }
-  return okStatus();
+  return wheels_.command(v, omega, "simulated base (WhiskeredRobot)");
 }
 
 double WhiskeredRobot::clearance(const Pose2& p) const {
@@ -416,29 +407,23 @@ double WhiskeredRobot::clearance(const Pose2& p) const {
 }
 
 void WhiskeredRobot::moveBase(double h) {
-  if (options_.max_wheel_acceleration > 0.0) {
-    // Each wheel ramps toward its commanded speed at the motor's acceleration limit.
-    const double dv = options_.max_wheel_acceleration * h;
-    left_ += std::clamp(target_left_ - left_, -dv, dv);
-    right_ += std::clamp(target_right_ - right_, -dv, dv);
-    v_ = 0.5 * (left_ + right_);
-    omega_ = (right_ - left_) / options_.wheel_base;
-  }
-  double v = v_;
-  Pose2 next = integrateArc(pose_, v, omega_, h);
+  wheels_.advance(h);
+  const double omega = wheels_.omega();
+  double v = wheels_.v();
+  Pose2 next = integrateArc(pose_, v, omega, h);
   if (v != 0.0) {
     const bool hit = world_.bodyCollides(next);
     if (hit && clearance(next) < clearance(pose_) - 1e-12) {
       // The bumper rule: no translation deeper into an obstacle; turning in place is allowed.
       v = 0.0;
-      next = integrateArc(pose_, 0.0, omega_, h);
+      next = integrateArc(pose_, 0.0, omega, h);
       ++refused_steps_;
       bumped_ = true;
     } else {
       bumped_ = hit;
     }
   }
-  setBaseBodies(v, omega_, h);
+  setBaseBodies(v, omega, h);
   pose_ = next;
 }
 

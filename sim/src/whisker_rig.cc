@@ -8,11 +8,6 @@
 
 namespace crunch::sim {
 
-namespace {
-// Samples of pose history kept while no episode runs; more is dropped at once.
-constexpr std::size_t kIdleHistory = 4000;
-}  // namespace
-
 Status WhiskerRig::Options::validate() const {
   if (auto s = robot.validate(); !s) return Error{"robot options: " + s.error().message};
   if (auto s = hall.validate(); !s) return Error{"Hall model options: " + s.error().message};
@@ -29,12 +24,16 @@ Result<std::unique_ptr<WhiskerRig>> WhiskerRig::create(const World& world,
     return Error{"whisker rig: " + std::to_string(mounts.size()) + " whisker mounts given, the "
                  "signal pipeline takes exactly " + std::to_string(signal::kWhiskers)};
   }
+  session::SensingChainOptions chain_options;
+  chain_options.pipeline = options.pipeline;
+  chain_options.mounts = mounts;
+  chain_options.start = start;
+  auto chain = session::SensingChain::create(chain_options);
+  if (!chain) return Error{"whisker rig: " + chain.error().message};
   auto robot = WhiskeredRobot::create(world, std::move(mounts), options.robot);
   if (!robot) return robot.error();
-  auto pipeline = signal::SignalPipeline::create(options.pipeline);
-  if (!pipeline) return pipeline.error();
   std::unique_ptr<WhiskerRig> rig(
-      new WhiskerRig(std::move(robot).value(), std::move(pipeline).value(), options));
+      new WhiskerRig(std::move(robot).value(), std::move(chain).value(), options));
 
   // Power-up and calibration at rest, as a real robot does before it moves.
   rig->robot_->place(start);
@@ -51,7 +50,7 @@ Result<std::unique_ptr<WhiskerRig>> WhiskerRig::create(const World& world,
     }
   }
   for (int w = 0; w < signal::kWhiskers; ++w) {
-    if (!rig->pipeline_.detector(w).ready()) {
+    if (!rig->pipeline().detector(w).ready()) {
       return Error{"whisker rig: whisker " + std::to_string(w) +
                    " did not calibrate at rest (no valid samples or too noisy)"};
     }
@@ -60,10 +59,10 @@ Result<std::unique_ptr<WhiskerRig>> WhiskerRig::create(const World& world,
   return rig;
 }
 
-WhiskerRig::WhiskerRig(std::unique_ptr<WhiskeredRobot> robot, signal::SignalPipeline pipeline,
-                       const Options& options)
+WhiskerRig::WhiskerRig(std::unique_ptr<WhiskeredRobot> robot,
+                       std::unique_ptr<session::SensingChain> chain, const Options& options)
     : robot_(std::move(robot)),
-      pipeline_(std::move(pipeline)),
+      chain_(std::move(chain)),
       hall_(options.hall),
       rng_(options.seed) {
   for (int w = 0; w < signal::kWhiskers; ++w) {
@@ -72,8 +71,11 @@ WhiskerRig::WhiskerRig(std::unique_ptr<WhiskeredRobot> robot, signal::SignalPipe
   }
   stream_.reserve(static_cast<std::size_t>(signal::kWhiskers) * BRIDGE_FRAME_LEN *
                   (RING_CAPACITY + 1));
-  poses_.reserve(static_cast<std::size_t>(options.pipeline.max_episode_samples) + kIdleHistory +
-                 64);
+}
+
+std::uint64_t WhiskerRig::missingFrames() const {
+  const io::SampleAssembler::Counters& c = chain_->assemblerCounters();
+  return c.placeholders + c.silent_fills;
 }
 
 void WhiskerRig::resetTruth() { truth_ = {}; }
@@ -96,33 +98,9 @@ void WhiskerRig::trackTruth() {
   }
 }
 
-void WhiskerRig::recordPose() {
-  if (!pipeline_.inEpisode() && poses_.size() >= kIdleHistory) {
-    poses_.clear();
-    poses_start_ = samples_;
-  }
-  if (poses_.size() < poses_.capacity()) poses_.push_back(robot_->odometry());
-}
-
-Pose2 WhiskerRig::poseAtSample(std::uint64_t index) const {
-  if (poses_.empty()) return robot_->odometry();
-  if (index < poses_start_) return poses_.front();
-  const std::uint64_t i = index - poses_start_;
-  return i < poses_.size() ? poses_[static_cast<std::size_t>(i)] : poses_.back();
-}
-
-std::uint32_t WhiskerRig::contactMask() const {
-  std::uint32_t mask = 0;
-  for (int w = 0; w < signal::kWhiskers; ++w) {
-    if (pipeline_.detector(w).inContact()) mask |= 1u << w;
-  }
-  return mask;
-}
-
 const signal::ContactEpisode* WhiskerRig::step() {
   robot_->step();
   trackTruth();
-  recordPose();
 
   // Hall sensors -> boards -> one multiplexed stream, as the FPGA bridge forwards it.
   stream_.clear();
@@ -137,31 +115,19 @@ const signal::ContactEpisode* WhiskerRig::step() {
     stream_.insert(stream_.end(), bytes.begin(), bytes.end());
   }
 
-  // Decode and assemble this tick's frame of the four whiskers.
-  got_.fill(false);
-  decoder_.feed(stream_, [this](const io::DecodedFrame& d) {
-    const int w = d.frame.board;
-    if (w < 0 || w >= signal::kWhiskers) return;
-    frame_[static_cast<std::size_t>(w)] = {d.frame.alpha, d.frame.beta, d.frame.status};
-    got_[static_cast<std::size_t>(w)] = true;
-  });
-  for (int w = 0; w < signal::kWhiskers; ++w) {
-    if (!got_[static_cast<std::size_t>(w)]) {
-      frame_[static_cast<std::size_t>(w)] = {0, 0, signal::status::kBusy};
-      ++missing_frames_;
-    }
-  }
-  ++samples_;
-  const signal::ContactEpisode* episode = pipeline_.push(frame_);
-  if (episode != nullptr) {
+  // Into the sensing chain with the pose of this tick (exact: §2.8). Each tick completes one
+  // sample, so at most one episode ends here.
+  const signal::ContactEpisode* episode = nullptr;
+  chain_->feed(stream_, robot_->odometry(), [this, &episode](const signal::ContactEpisode& ep) {
+    episode = &ep;
     episode_truth_ = truth_;
     resetTruth();
-  }
+  });
   return episode;
 }
 
 const signal::ContactEpisode* WhiskerRig::finish() {
-  const signal::ContactEpisode* episode = pipeline_.finish();
+  const signal::ContactEpisode* episode = chain_->endEpisode();
   if (episode != nullptr) {
     episode_truth_ = truth_;
     resetTruth();

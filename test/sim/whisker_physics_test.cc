@@ -273,7 +273,7 @@ TEST_CASE("WhiskeredRobot: whiskers at rest lie straight along their mounts", "[
   CHECK(robot->jointStiffness(0) == Approx(robot->options().beam.follicle_stiffness));
 }
 
-TEST_CASE("WhiskeredRobot: drive clamps each wheel to the Create's 0.5 m/s", "[sim]") {
+TEST_CASE("WhiskeredRobot: drive keeps the wheels within the Create's 0.5 m/s", "[sim]") {
   const auto world = World::build(emptyArena());
   auto robot = makeRobot(*world);
   robot->place({1.0, 1.0, 0.0});
@@ -289,13 +289,21 @@ TEST_CASE("WhiskeredRobot: drive clamps each wheel to the Create's 0.5 m/s", "[s
   CHECK(robot->wheelSpeeds().first == Approx(-0.5));
   CHECK(robot->wheelSpeeds().second == Approx(0.5));
 
-  // One wheel saturates, the other keeps its speed: the turn gets wider.
+  // One wheel would exceed the limit: both are scaled by one factor, so the path's curvature
+  // (omega / v = 5 /m) is kept (DiffDrive; until issue 11 the other wheel kept its speed and the
+  // turn got wider).
   REQUIRE(robot->drive(0.4, 2.0).ok());
-  CHECK(robot->wheelSpeeds().first == Approx(0.4 - 0.258));
+  const double s = 0.5 / (0.4 + 0.258);
+  CHECK(robot->wheelSpeeds().first == Approx((0.4 - 0.258) * s));
   CHECK(robot->wheelSpeeds().second == Approx(0.5));
 
+  // Non-finite input: an Error, and the base stops (it used to keep the previous command).
   CHECK_FALSE(robot->drive(std::nan(""), 0.0).ok());
+  CHECK(robot->wheelSpeeds().first == 0.0);
+  CHECK(robot->wheelSpeeds().second == 0.0);
+  REQUIRE(robot->drive(0.1, 0.0).ok());
   CHECK_FALSE(robot->drive(0.0, INFINITY).ok());
+  CHECK(robot->wheelSpeeds().second == 0.0);
 }
 
 TEST_CASE("WhiskeredRobot: odometry is the exact arc of the commanded motion", "[sim]") {

@@ -5,13 +5,16 @@
 // Hall model, the firmware on virtual whisker boards, the bridge decoder and the signal
 // pipeline (WhiskerRig). Its noise is what those classifiers make; nothing is added.
 //
-// Reports and negative evidence come from WhiskEvidence (session/whisk_evidence.h), which
-// `crunchhost --robot` uses too. One whisk may give several contact episodes (the whisker meets the object on the
-// toward and on the return pass); each whisker reports at most once per whisk, from the first
-// episode in which it touched: its f1 is the peak of that first pass (eq. 1), as the shipped
-// models were trained (`crunchhost train --radial-f1 first`; docs/TRAINING.md: the return pass
-// can meet a thin object's far side and peak higher, which made the radial error 5.5 mm
-// instead of 1.9 mm):
+// Reports and negative evidence come from the rig's session::SensingChain (session/
+// sensing_chain.h: decoder, sample assembler, signal pipeline, WhiskEvidence), the chain
+// `crunchhost --robot` runs, with the simulator's exact pose as its pose source (§2.8); sense()
+// opens a whisk on it where the robot's control loop writes the whisk-start mark, and closes it
+// when the whisk's last episode has ended. One whisk may give several contact episodes (the
+// whisker meets the object on the toward and on the return pass); each whisker reports at most
+// once per whisk, from the first episode in which it touched: its f1 is the peak of that first
+// pass (eq. 1), as the shipped models were trained (`crunchhost train --radial-f1 first`;
+// docs/TRAINING.md: the return pass can meet a thin object's far side and peak higher, which
+// made the radial error 5.5 mm instead of 1.9 mm):
 //   r     the radial model's estimate (eq. 2), clamped to [0, external length];
 //   phi   the orientation template's angle (eq. 3), which is relative to the heading at the
 //         episode's first contact, turned into the frame of the robot at this whisker's peak;
@@ -22,8 +25,12 @@
 // Between poses: a whisk that ended with a whisker still in contact is followed by a rest at the
 // clear start pose until the detectors release (at most 1 s), so the next pose starts free.
 //
-// Negative evidence: every ~0.5 degrees of the whisk, a whisker whose detector saw no contact
-// within +-0.1 s (the smoothing lags the physics by ~14 ms) contributes its straight rest ray.
+// Negative evidence: the chain's, as on the robot: every WhiskEvidence::kFreeEvery pipeline
+// samples (60 ms, ~0.45 degrees of the whisk), at all times — the whisk, the wait for its last
+// episode to end, and the rest at the clear pose between whisks — a whisker whose detector saw
+// no contact within +-kFreeGuard such samples (0.24 s) contributes its straight rest ray.
+// (Before issue 11 the physics path sampled only during the whisk, counted from its start;
+// docs/WHISKERS.md, "Physics path through the session", compares the two.)
 //
 // Scoring: against the simulator's ground truth at the same peak (WhiskerTruth), the reports'
 // errors in r and phi are accumulated (errors()), for report.json's measured sigma_r, sigma_phi.
@@ -91,7 +98,8 @@ class PhysicsSensorModel final : public SensorModel {
  private:
   PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig, std::vector<WhiskerMount> mounts,
                      const Options& options);
-  void takeEpisode(const signal::ContactEpisode& episode);
+  // Scores the reports the episode just ended gave (bit w: whisker w's first report).
+  void score(std::uint32_t set);
 
   // A report's error against the truth, taken when the episode that set it ended.
   struct Score {
@@ -102,7 +110,6 @@ class PhysicsSensorModel final : public SensorModel {
   std::unique_ptr<WhiskerRig> rig_;
   std::vector<WhiskerMount> mounts_;
   Options options_;
-  WhiskEvidence evidence_;      // the reports and free rays of the current whisk
   std::vector<Score> scores_;   // per whisker
   std::vector<FreeRay> free_;
   ReportErrors errors_;

@@ -16,8 +16,10 @@
 // carrying N such whiskers in an ODE dynamics world, implementing crunch::MobileBase so the same
 // behaviour code (body whisk, §2.3) drives it and the robot.
 //   - The base is kinematic (infinite mass, moved by its commanded velocity): a differential
-//     drive whose wheel speeds are clamped to the Create's +-0.5 m/s, each wheel on its own as a
-//     saturated motor does (Options::max_wheel_speed, wheel_base). Its pose is integrated
+//     drive whose wheel speeds are limited to the Create's +-0.5 m/s by scaling both wheels by
+//     one factor, keeping the path's curvature, as the Create driver does (DiffDrive,
+//     diff_drive.h, shared with KinematicBase; until issue 11 each wheel was clamped on its own,
+//     which bent the path). Its pose is integrated
 //     exactly (circular arcs); odometry() returns that pose: zero odometry noise, as in the
 //     paper's mapping simulation (§2.8). In ODE it is one kinematic body per whisker, all moved
 //     together, so that each whisker is an island of its own (see Whisker::follicle).
@@ -67,6 +69,7 @@
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
 #include "crunch/robot/shapelet.h"
+#include "crunch_sim/diff_drive.h"
 #include "crunch_sim/world.h"
 
 // ODE handle types (see world.h); <ode/ode.h> stays in the .cc.
@@ -215,7 +218,9 @@ class WhiskeredRobot final : public MobileBase {
   // max_contacts_per_segment per capsule).
   int contactCount(int w) const;
 
-  // MobileBase. drive() clamps each wheel to +-max_wheel_speed; Error for non-finite input.
+  // MobileBase: the wheels are a DiffDrive (diff_drive.h): both wheels scaled by one factor to
+  // +-max_wheel_speed (the curvature is kept), ramped at max_wheel_acceleration if set;
+  // non-finite input stops the base and is an Error.
   Status drive(double v, double omega) override;
   // The exact pose (zero odometry noise, §2.8); theta is integrated, not wrapped.
   Pose2 odometry() const override { return pose_; }
@@ -224,7 +229,7 @@ class WhiskeredRobot final : public MobileBase {
   double now() const override { return time_; }
 
   // Wheel speeds (left, right) in effect after clamping, m/s.
-  std::pair<double, double> wheelSpeeds() const { return {left_, right_}; }
+  std::pair<double, double> wheelSpeeds() const { return {wheels_.left(), wheels_.right()}; }
   // Substeps in which the bumper rule refused the base's translation.
   long long refusedSteps() const { return refused_steps_; }
   // Steps split into more than Options::substeps by the adaptive refinement.
@@ -321,8 +326,7 @@ class WhiskeredRobot final : public MobileBase {
   long long dropped_contacts_ = 0;
 
   Pose2 pose_;
-  double v_ = 0.0, omega_ = 0.0, left_ = 0.0, right_ = 0.0;
-  double target_left_ = 0.0, target_right_ = 0.0;  // commanded wheel speeds, m/s
+  DiffDrive wheels_;  // the commanded and actual wheel speeds
   double time_ = 0.0;
   bool bumped_ = false;
   long long refused_steps_ = 0;

@@ -3,24 +3,29 @@
 //   WhiskeredRobot (ODE bending whiskers) --base angles--> HallSensorModel (MLX90333 codes)
 //     --> VirtualWhiskerBoard x N (the firmware core: sampler, ring, bridge frames)
 //     --> one byte stream, the boards' frames interleaved as the FPGA bridge multiplexes them
-//     --> io::BridgeStreamDecoder (resync, CRC, counters) --> SampleFrame per tick
-//     --> signal::SignalPipeline (detection, filters, eqs. 1-3) --> ContactEpisode
+//     --> session::SensingChain, the one `--robot` runs (session/sensing_chain.h):
+//         io::BridgeStreamDecoder --> io::SampleAssembler --> signal::SignalPipeline
+//         --> WhiskEvidence (reports, free rays per whisk), each sample stamped with the
+//         simulator's exact pose (§2.8)
 //
-// Nothing on this path knows it is simulated past the Hall model: the decoder and the pipeline
-// are the ones `--robot` runs. The rig also keeps the ground truth the simulator knows, so
-// reports can be scored: per whisker, the true contact distance along the whisker (from ODE's
-// contact points) at the sample of its largest base deflection, and the robot's pose at every
-// sample of the current episode.
+// Nothing on this path knows it is simulated past the Hall model: the bytes of each tick go into
+// the same chain as a live robot's USB chunks. Every board sends one frame per tick (power-up
+// frames included), so the assembler completes exactly one sample per step(): pipeline sample k
+// is step k since create(). The rig also keeps the ground truth the simulator knows, so reports
+// can be scored: per whisker, the true contact distance along the whisker (from ODE's contact
+// points) at the sample of its largest base deflection.
 //
 // Start-up: create() powers the boards up (SAMPLER_POWERUP_TICKS) and lets the pipeline's
 // detectors calibrate their rest and noise (ContactDetectorOptions::calibration_samples) with
 // the robot standing still at `start`, away from everything (create() fails if a whisker
 // touches anything there).
 //
-// Ownership: owns the robot, boards, decoder and pipeline; holds a reference to the World, which
+// Ownership: owns the robot, boards and sensing chain; holds a reference to the World, which
 // must outlive it. Thread-safety: none (ODE and the host HAL are single-threaded).
-// Allocation: step() allocates nothing after warm-up (the pose history is reserved for
-// PipelineOptions::max_episode_samples).
+// Allocation: step() allocates nothing after warm-up (the chain's pose history is allocated at
+// create()), except that the chain's negative-evidence samples (32 bytes per 60 ms) grow until a
+// whisk ends on it: a user that never calls chain().endWhisk() (training, crunch-virtual-robot)
+// lets that buffer grow, amortised, about 1.9 MB per simulated hour.
 #pragma once
 
 #include <array>
@@ -34,6 +39,7 @@
 #include "crunch/core/rng.h"
 #include "crunch/io/bridge_stream.h"
 #include "crunch/robot/shapelet.h"
+#include "crunch/session/sensing_chain.h"
 #include "crunch/signal/pipeline.h"
 #include "crunch_sim/hall_model.h"
 #include "crunch_sim/virtual_whisker_board.h"
@@ -69,10 +75,11 @@ class WhiskerRig {
   WhiskerRig(const WhiskerRig&) = delete;
   WhiskerRig& operator=(const WhiskerRig&) = delete;
 
-  // One 500 us sample through the whole path. Returns the episode this sample completed, or
-  // nullptr; the pointer is valid until the next step() or finish().
+  // One 500 us sample through the whole path: the tick's bridge bytes are fed to the chain with
+  // the robot's pose. Returns the episode this sample completed (already taken by the chain if a
+  // whisk is open), or nullptr; the pointer is valid until the next step() or finish().
   const signal::ContactEpisode* step();
-  // Ends the episode in progress (signal::SignalPipeline::finish()).
+  // Ends the episode in progress (session::SensingChain::endEpisode()).
   const signal::ContactEpisode* finish();
 
   // Ground truth since the last episode ended (or the last resetTruth()): index w = whisker w.
@@ -82,47 +89,42 @@ class WhiskerRig {
     return episode_truth_;
   }
   void resetTruth();
-  // The robot's pose at pipeline sample `index` of the current or just-ended episode (the
-  // pipeline's own sample count); the nearest recorded pose if it is out of range.
-  Pose2 poseAtSample(std::uint64_t index) const;
+  // The robot's pose at pipeline sample `index` (the chain's pose history: the last
+  // session::kPoseHistory samples).
+  Pose2 poseAtSample(std::uint64_t index) const { return chain_->poseAtSample(index); }
 
   // Bit w set while the pipeline's detector for whisker w is in contact: what the behaviour
   // layer sees (it never reads the simulator's truth).
-  std::uint32_t contactMask() const;
+  std::uint32_t contactMask() const { return chain_->contactMask(); }
 
   WhiskeredRobot& robot() { return *robot_; }
   const WhiskeredRobot& robot() const { return *robot_; }
-  signal::SignalPipeline& pipeline() { return pipeline_; }
-  const signal::SignalPipeline& pipeline() const { return pipeline_; }
-  const io::BridgeStreamCounters& decoderCounters() const { return decoder_.counters(); }
+  // The host side: whisks are opened and closed on it (beginWhisk / endWhisk), models set.
+  session::SensingChain& chain() { return *chain_; }
+  const session::SensingChain& chain() const { return *chain_; }
+  const signal::SignalPipeline& pipeline() const { return chain_->pipeline(); }
+  const io::BridgeStreamCounters& decoderCounters() const { return chain_->decoderCounters(); }
   // The bridge bytes of the last step(): every board's frame of that tick, as the FPGA bridge
   // forwards them to USB (the virtual robot serves these over a umockdev USB device).
   std::span<const std::uint8_t> lastTickBytes() const { return stream_; }
   VirtualWhiskerBoard& board(int w) { return *boards_[static_cast<std::size_t>(w)]; }
-  // Ticks at which some board's frame did not arrive (fed to the pipeline as kDropped).
-  std::uint64_t missingFrames() const { return missing_frames_; }
+  // Readings the assembler had to fill in because a board's frame did not arrive (gaps and
+  // silent boards: io::SampleAssembler::Counters placeholders + silent_fills).
+  std::uint64_t missingFrames() const;
 
  private:
-  WhiskerRig(std::unique_ptr<WhiskeredRobot> robot, signal::SignalPipeline pipeline,
+  WhiskerRig(std::unique_ptr<WhiskeredRobot> robot, std::unique_ptr<session::SensingChain> chain,
              const Options& options);
   void trackTruth();
-  void recordPose();
 
   std::unique_ptr<WhiskeredRobot> robot_;
-  signal::SignalPipeline pipeline_;
+  std::unique_ptr<session::SensingChain> chain_;
   HallSensorModel hall_;
   Rng rng_;
   std::array<std::unique_ptr<VirtualWhiskerBoard>, signal::kWhiskers> boards_;
-  io::BridgeStreamDecoder decoder_;
   std::vector<std::uint8_t> stream_;  // one tick's bytes of all boards, reserved
-  signal::SampleFrame frame_{};
-  std::array<bool, signal::kWhiskers> got_{};
-  std::uint64_t missing_frames_ = 0;
-  std::uint64_t samples_ = 0;  // samples fed to the pipeline
   std::array<WhiskerTruth, signal::kWhiskers> truth_{};
   std::array<WhiskerTruth, signal::kWhiskers> episode_truth_{};
-  std::vector<Pose2> poses_;        // robot pose per sample since poses_start_
-  std::uint64_t poses_start_ = 0;   // pipeline sample index of poses_[0]
 };
 
 }  // namespace crunch::sim

@@ -1,12 +1,13 @@
 // The data path of `crunchhost --robot` and `crunchhost --replay` (paper §2.1-2.8), one input
 // chunk at a time and in the order the control loop handled them:
 //
-//   bridge bytes --> io::BridgeStreamDecoder --> io::SampleAssembler --> signal::SignalPipeline
-//                                                                            | episodes
-//   Create bytes --> io::oi::SensorTracker (odometry, bumpers)               v
-//                          | pose per pipeline sample ------------> WhiskEvidence (reports,
-//                                                                     free rays) per whisk
-//   whisk-end marks ------------------------------------------------> Mapper (blackboard)
+//   bridge bytes --> SensingChain (decoder, assembler, signal pipeline, WhiskEvidence)
+//                          ^ pose per bridge chunk                  | reports, free rays
+//   Create bytes --> io::oi::SensorTracker (odometry, bumpers)      |   per whisk
+//   whisk marks -----------------------------------------------------+--> Mapper (blackboard)
+//
+// RobotSession = SensingChain (sensing_chain.h, which the simulator's physics path runs too) +
+// the odometry tracker as its pose source + the Mapper + the recorder.
 //
 // Live, the control loop hands each chunk to handle() as it reads it — the USB chunks out of the
 // SPSC ring, the Create's bytes from the driver's byte tap, a mark when a body whisk ends — and
@@ -15,12 +16,12 @@
 // map — comes out the same.
 //
 // Which contacts are reported: the episodes that end between a kWhiskStart mark (the toward
-// leg begins) and the kWhiskEnd mark — the body whisk's own, including the episode of the
-// contact that started it, which the sweep continues (the robot stops on the contact and whisks
-// without reversing: see robot_mode.h). Episodes that end outside a whisk (a whisker brushing
-// something while the robot drives or turns) are counted (RobotSessionCounts::roaming_episodes)
-// and not reported: the radial model was trained on sweeps, not on pushes. Rays swept free
-// count at all times (negative evidence).
+// leg begins: SensingChain::beginWhisk) and the kWhiskEnd mark (SensingChain::endWhisk) — the
+// body whisk's own, including the episode of the contact that started it, which the sweep
+// continues (the robot stops on the contact and whisks without reversing: see robot_mode.h).
+// Episodes that end outside a whisk (a whisker brushing something while the robot drives or
+// turns) are counted (RobotSessionCounts::roaming_episodes) and not reported: the radial model
+// was trained on sweeps, not on pushes. Rays swept free count at all times (negative evidence).
 //
 // Poses: the map frame is the one the robot started in, placed at Options::start; the pose of a
 // pipeline sample is the odometry when its bridge chunk was handled (the Create streams every
@@ -28,8 +29,8 @@
 //
 // Ownership: owns every stage; the recorder, if set, is not owned. Thread-safety: none; the
 // control loop (or the replay) owns a session. Allocation: handle() of bridge and Create chunks
-// allocates nothing once the run is warm (the pose history is allocated at create()); a whisk's
-// end allocates the mapper's new shapelets and per-pose MAP.
+// allocates nothing once the run is warm (the chain's pose history is allocated at create()); a
+// whisk's end allocates the mapper's new shapelets and per-pose MAP.
 #pragma once
 
 #include <cstdint>
@@ -42,6 +43,7 @@
 #include "crunch/io/recording.h"
 #include "crunch/io/sample_assembler.h"
 #include "crunch/mapping/mapper.h"
+#include "crunch/session/sensing_chain.h"
 #include "crunch/session/whisk_evidence.h"
 #include "crunch/signal/pipeline.h"
 
@@ -57,8 +59,9 @@ struct RobotSessionOptions {
   Vec2 area_hi{6.0, 6.0};
   bool checksum_includes_header = true;  // the Create 1's checksum quirk (io/create_oi.h)
 
-  // kWhiskers mounts; pipeline.validate() and mapping.validate() (errors prefixed "pipeline: ",
-  // "mapping: "); a finite start; an area with finite corners, 0.5..kMaxAreaSide m each way
+  // The sensing chain's options (SensingChainOptions::validate: kWhiskers mounts,
+  // pipeline.validate() prefixed "pipeline: "); mapping.validate() (prefixed "mapping: "); a
+  // finite start; an area with finite corners, 0.5..kMaxAreaSide m each way
   // (the negative-evidence grid has a 1 cm cell: 50 m is 50 MB). okStatus(), or an Error naming
   // the first bad field. RobotSession::create calls it.
   Status validate() const;
@@ -91,12 +94,12 @@ class RobotSession {
   void setRecorder(io::RecordingWriter* recorder) { recorder_ = recorder; }
 
   // Bit w set while whisker w's detector is in contact (what the behaviour acts on).
-  std::uint32_t contactMask() const;
+  std::uint32_t contactMask() const { return chain_->contactMask(); }
   // The odometry pose in the map frame.
   Pose2 pose() const;
   bool bumped() const { return tracker_.bumped(); }
   // The pipeline's detectors have calibrated their rest (the robot may move).
-  bool calibrated() const;
+  bool calibrated() const { return chain_->calibrated(); }
 
   // The map so far (no random draws) and the final one (call once, after the last chunk: ends
   // an open whisk first).
@@ -104,35 +107,28 @@ class RobotSession {
   Map finish();
 
   const RobotSessionCounts& counts() const { return counts_; }
-  const io::BridgeStreamCounters& decoderCounters() const { return decoder_.counters(); }
-  const io::SampleAssembler::Counters& assemblerCounters() const { return assembler_.counters(); }
+  const io::BridgeStreamCounters& decoderCounters() const { return chain_->decoderCounters(); }
+  const io::SampleAssembler::Counters& assemblerCounters() const {
+    return chain_->assemblerCounters();
+  }
   const io::oi::SensorTracker& tracker() const { return tracker_; }
-  const WhiskEvidence::Counts& evidenceCounts() const { return evidence_.counts(); }
+  const WhiskEvidence::Counts& evidenceCounts() const { return chain_->evidence().counts(); }
+  const SensingChain& chain() const { return *chain_; }
   // Writes and handles a kBridgeReconnected mark: forgets partial frames, per-board baselines
   // and queued readings (the bridge was replugged).
   Status bridgeReconnected(std::uint64_t t_ns);
 
  private:
-  RobotSession(const RobotSessionOptions& options, signal::SignalPipeline pipeline);
-  void onSample(const signal::SampleFrame& frame);
-  void takeEpisode(const signal::ContactEpisode& episode);
+  RobotSession(const RobotSessionOptions& options, std::unique_ptr<SensingChain> chain);
   Status mark(io::MarkKind kind, std::uint64_t t_ns);
-  void openWhisk();
   void closeWhisk();
-  Pose2 poseAtSample(std::uint64_t index) const;
+  void syncCounts();
 
   RobotSessionOptions options_;
   io::RecordingWriter* recorder_ = nullptr;
-  io::BridgeStreamDecoder decoder_;
-  io::SampleAssembler assembler_;
-  signal::SignalPipeline pipeline_;
+  std::unique_ptr<SensingChain> chain_;
   io::oi::SensorTracker tracker_;
-  WhiskEvidence evidence_;
   Mapper mapper_;
-  std::vector<Pose2> pose_history_;  // ring: the pose of pipeline sample i at i % size
-  Pose2 free_pose_;
-  std::uint32_t free_mask_ = 0;
-  bool in_whisk_ = false;
   std::vector<ContactReport> reports_;
   std::vector<FreeRay> free_rays_;
   RobotSessionCounts counts_;

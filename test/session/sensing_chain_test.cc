@@ -1,0 +1,231 @@
+// SensingChain (crunch/session/sensing_chain.h): bridge bytes in, reports and free rays out.
+// Synthetic bridge frames check the pose stamping, the assembler's time base and the
+// negative-evidence sampling; the simulator's rig (its bytes, its exact pose) checks whisks at a
+// table leg: reported inside a whisk, counted outside one.
+#include "crunch/session/sensing_chain.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "crunch/behaviour/body_whisk.h"
+#include "crunch/scene/scene.h"
+#include "crunch/signal/models_io.h"
+#include "crunch_sim/training.h"
+#include "crunch_sim/whisker_rig.h"
+#include "crunch_sim/world.h"
+
+extern "C" {
+#include "whisker/bridge_frame.h"
+}
+
+namespace {
+
+using namespace crunch;
+using session::SensingChain;
+using session::SensingChainOptions;
+
+SensingChainOptions chainOptions(const Pose2& start = {}) {
+  SensingChainOptions o;
+  o.pipeline = sim::physicsRigOptions(1).pipeline;
+  o.mounts = defaultWhiskerArray();
+  o.start = start;
+  return o;
+}
+
+// The bridge bytes of tick `tick`: one frame per board (all four unless `skip` names one), a
+// quiet reading with a little deterministic jitter.
+std::vector<std::uint8_t> tickBytes(std::uint32_t tick, int skip = -1) {
+  std::vector<std::uint8_t> out;
+  for (int b = 0; b < signal::kWhiskers; ++b) {
+    if (b == skip) continue;
+    bridge_frame_t f{};
+    f.board = static_cast<std::uint8_t>(b);
+    f.seq = static_cast<std::uint16_t>(tick);
+    f.tick = tick;
+    f.alpha = static_cast<std::uint16_t>(8000 + (tick * 7 + static_cast<std::uint32_t>(b)) % 5);
+    f.beta = static_cast<std::uint16_t>(8000 + (tick * 3 + static_cast<std::uint32_t>(b)) % 4);
+    f.status = 0;
+    std::uint8_t bytes[BRIDGE_FRAME_LEN];
+    REQUIRE(bridge_encode(&f, bytes) == 0);
+    out.insert(out.end(), bytes, bytes + BRIDGE_FRAME_LEN);
+  }
+  return out;
+}
+
+// The pose source of the synthetic tests: the robot creeping along +x and turning.
+Pose2 poseOfTick(std::uint32_t t) {
+  const double k = static_cast<double>(t);
+  return {1.0 + 1e-4 * k, 2.0, 0.1 + 1e-4 * k};
+}
+
+// One table; the robot whisks in place facing its near-left leg (as physics_one_table.json).
+Scene oneTable() {
+  Scene s;
+  s.width = 3.0;
+  s.depth = 3.0;
+  TableSpec t;
+  t.pose = {1.5, 1.5, 0.0};
+  s.tables.push_back(t);
+  return s;
+}
+
+// A rig facing the leg from 0.27 m, its chain carrying the shipped models.
+std::unique_ptr<sim::WhiskerRig> rigAtLeg(const sim::World& world) {
+  auto rig = sim::WhiskerRig::create(world, defaultWhiskerArray(), {0.85, 1.275, 0.0},
+                                     sim::physicsRigOptions(1));
+  REQUIRE(rig);
+  auto models = signal::loadModels(std::string(CRUNCH_SOURCE_DIR) + "/models/sim_models.json");
+  REQUIRE(models);
+  REQUIRE(rig.value()->chain().setModels(models.value()));
+  return std::move(rig).value();
+}
+
+// The in-place body whisk, then 4 s for the last episode to end; the whisk is opened on the
+// chain first when `mark` is set. Returns the episodes the rig saw end.
+int whisk(sim::WhiskerRig& rig, bool mark) {
+  BodyWhisk whisk(rig.robot(), BodyWhisk::Options{});
+  if (mark) rig.chain().beginWhisk();
+  REQUIRE(whisk.startInPlace(+1));
+  int episodes = 0;
+  for (int n = 0; n < 40000 && !whisk.done(); ++n) {
+    if (rig.step() != nullptr) ++episodes;
+    REQUIRE(whisk.update(rig.contactMask()));
+  }
+  REQUIRE(whisk.done());
+  for (int n = 0; n < 8000 && rig.pipeline().inEpisode(); ++n) {
+    if (rig.step() != nullptr) ++episodes;
+  }
+  if (rig.finish() != nullptr) ++episodes;
+  return episodes;
+}
+
+}  // namespace
+
+TEST_CASE("SensingChain: options name the bad field", "[session]") {
+  SensingChainOptions o = chainOptions();
+  CHECK(o.validate());
+  o.mounts.pop_back();
+  CHECK_THAT(o.validate().error().message, Catch::StartsWith("mounts:"));
+  o = chainOptions();
+  o.pipeline.max_episode_samples = static_cast<std::int64_t>(session::kPoseHistory);
+  CHECK_THAT(o.validate().error().message, Catch::Contains("max_episode_samples"));
+  CHECK(!SensingChain::create(o));
+}
+
+TEST_CASE("SensingChain: each sample carries the pose given with the bytes that completed it",
+          "[session]") {
+  auto chain = SensingChain::create(chainOptions({0.5, 0.5, 0.0}));
+  REQUIRE(chain);
+  SensingChain& c = *chain.value();
+  CHECK(c.poseAtSample(0).x == 0.5);  // before any sample: the start
+  for (std::uint32_t t = 0; t < 500; ++t) c.feed(tickBytes(t), poseOfTick(t));
+  CHECK(c.counts().samples == 500);
+  CHECK(c.assemblerCounters().samples == 500);
+  for (std::uint32_t t = 0; t < 500; t += 37) {
+    CHECK(c.poseAtSample(t).x == poseOfTick(t).x);
+    CHECK(c.poseAtSample(t).theta == poseOfTick(t).theta);
+  }
+  // Bytes cut anywhere: a sample completed by the second chunk takes the second chunk's pose.
+  const std::vector<std::uint8_t> b = tickBytes(500);
+  const std::size_t cut = 3 * BRIDGE_FRAME_LEN + 5;  // within the last board's frame
+  c.feed({b.data(), cut}, poseOfTick(1000));
+  CHECK(c.counts().samples == 500);
+  c.feed({b.data() + cut, b.size() - cut}, poseOfTick(2000));
+  CHECK(c.counts().samples == 501);
+  CHECK(c.poseAtSample(500).x == poseOfTick(2000).x);
+}
+
+TEST_CASE("SensingChain: a board's missing frame is filled, the 2 kHz time base kept",
+          "[session]") {
+  auto chain = SensingChain::create(chainOptions());
+  REQUIRE(chain);
+  SensingChain& c = *chain.value();
+  for (std::uint32_t t = 0; t < 300; ++t) c.feed(tickBytes(t, t == 150 ? 2 : -1), poseOfTick(t));
+  // Board 2's frame of tick 150 is missing: its next frame (seq 151) is preceded by a
+  // placeholder, so tick 151's sample is still sample 151.
+  CHECK(c.counts().samples == 300);
+  CHECK(c.assemblerCounters().placeholders == 1);
+  CHECK(c.decoderCounters().boards[2].lost_frames == 1);
+}
+
+TEST_CASE("SensingChain: free rays every kFreeEvery samples, at the pose of each sample's start",
+          "[session]") {
+  auto chain = SensingChain::create(chainOptions());
+  REQUIRE(chain);
+  SensingChain& c = *chain.value();
+  constexpr std::uint32_t kTicks = 5 * WhiskEvidence::kFreeEvery + 10;
+  for (std::uint32_t t = 0; t < kTicks; ++t) c.feed(tickBytes(t), poseOfTick(t));
+  REQUIRE(c.contactMask() == 0);
+  std::vector<ContactReport> reports;
+  std::vector<FreeRay> rays;
+  c.endWhisk(reports, rays);
+  CHECK(reports.empty());
+  // Samples 0, 120, ..., 480 started a negative-evidence sample; the one started at 600 is still
+  // accumulating and goes to the next whisk.
+  REQUIRE(rays.size() == 5 * defaultWhiskerArray().size());
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  for (std::size_t i = 0; i < 5; ++i) {
+    const Pose2 p = poseOfTick(static_cast<std::uint32_t>(i * WhiskEvidence::kFreeEvery));
+    for (std::size_t w = 0; w < mounts.size(); ++w) {
+      const FreeRay& r = rays[i * mounts.size() + w];
+      CHECK((r.a - p.toWorld(mounts[w].base)).norm() < 1e-12);
+      CHECK((r.b - r.a).norm() == Approx(mounts[w].length));
+    }
+  }
+  CHECK(c.counts().whisks == 1);
+  rays.clear();
+  c.endWhisk(reports, rays);  // nothing new sampled
+  CHECK(rays.empty());
+}
+
+TEST_CASE("SensingChain: the simulator's whisk at a leg is reported within a whisk only",
+          "[session]") {
+  const Scene scene = oneTable();
+  auto world = sim::World::build(scene);
+
+  SECTION("within a whisk: reports at the pose of their peak, near the leg") {
+    auto rig = rigAtLeg(*world);
+    session::SensingChain& c = rig->chain();
+    REQUIRE(c.calibrated());
+    const int episodes = whisk(*rig, true);
+    CHECK(episodes >= 1);
+    CHECK(c.inWhisk());
+    CHECK(c.reportedMask() != 0);
+    std::vector<ContactReport> reports;
+    std::vector<FreeRay> rays;
+    c.endWhisk(reports, rays);
+    CHECK_FALSE(c.inWhisk());
+    CHECK(c.counts().episodes == static_cast<std::uint64_t>(episodes));
+    CHECK(c.counts().roaming_episodes == 0);
+    REQUIRE(!reports.empty());
+    CHECK(c.counts().reports == static_cast<int>(reports.size()));
+    CHECK(!rays.empty());
+    for (const ContactReport& r : reports) {
+      // In place: every pose of the whisk is at the start position.
+      CHECK(std::hypot(r.robot.x - 0.85, r.robot.y - 1.275) < 1e-9);
+      const WhiskerMount& m = defaultWhiskerArray()[static_cast<std::size_t>(r.whisker)];
+      const double dir = r.robot.theta + m.bearing;
+      const Vec2 at = r.robot.toWorld(m.base) + r.r * Vec2{std::cos(dir), std::sin(dir)};
+      double d = 1e9;
+      for (const OrientedRect& leg : scene.tables[0].legs()) {
+        d = std::min(d, closestOnPerimeter(leg, at).distance);
+      }
+      CHECK(d < 0.06);  // the straight-whisker point; the bent whisker touched nearer
+    }
+  }
+  SECTION("outside a whisk: counted as roaming, not reported") {
+    auto rig = rigAtLeg(*world);
+    session::SensingChain& c = rig->chain();
+    const int episodes = whisk(*rig, false);
+    CHECK(episodes >= 1);
+    CHECK(c.reportedMask() == 0);
+    std::vector<ContactReport> reports;
+    std::vector<FreeRay> rays;
+    c.endWhisk(reports, rays);
+    CHECK(reports.empty());
+    CHECK(c.counts().episodes == 0);
+    CHECK(c.counts().roaming_episodes == static_cast<std::uint64_t>(episodes));
+  }
+}
