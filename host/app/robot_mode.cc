@@ -1,8 +1,6 @@
 #include "robot_mode.h"
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <ostream>
@@ -15,9 +13,11 @@
 #include "crunch/io/usb_bridge.h"
 #include "crunch/session/controller.h"
 #include "crunch/session/map_output.h"
+#include "crunch/session/replay.h"
 #include "crunch/session/robot_session.h"
 #include "crunch/session/session_settings.h"
 #include "crunch/signal/models_io.h"
+#include "stop_signals.h"
 
 namespace crunch::app {
 
@@ -31,34 +31,6 @@ using json = nlohmann::json;
 // 1024 slots: 4 MiB, 4 s of 28 boards at 2 kHz in full 4 KiB transfers; at least 0.5 s when the
 // bridge completes a transfer per frame group (about 1 ms each).
 constexpr std::size_t kRingSlots = 1024;
-
-// SIGINT/SIGTERM: the control loop sees this and shuts down in order.
-std::atomic<int> g_signal{0};
-extern "C" void onSignal(int sig) { g_signal.store(sig); }
-
-class SignalGuard {
- public:
-  SignalGuard() {
-    g_signal.store(0);
-    struct sigaction sa {};
-    sa.sa_handler = onSignal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int_);
-    sigaction(SIGTERM, &sa, &old_term_);
-  }
-  ~SignalGuard() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  SignalGuard(const SignalGuard&) = delete;
-  SignalGuard& operator=(const SignalGuard&) = delete;
-
- private:
-  struct sigaction old_int_ {};
-  struct sigaction old_term_ {};
-};
-
-const char* signalName(int sig) { return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "signal"; }
 
 double secondsSince(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -164,11 +136,11 @@ session::EventSink progressPrinter(bool json_progress, std::ostream& out) {
   };
 }
 
-// The control loop: steps the controller until it ends or a signal comes (under a SignalGuard).
-void runLoop(session::RobotController& controller) {
+// The control loop: steps the controller until it ends or a signal comes.
+void runLoop(session::RobotController& controller, const StopSignals& signals) {
   while (true) {
-    if (const int sig = g_signal.load(); sig != 0) {
-      controller.stop(std::string("stopped by ") + signalName(sig));
+    if (const int sig = signals.received(); sig != 0) {
+      controller.stop(std::string("stopped by ") + StopSignals::name(sig));
       return;
     }
     if (!controller.step()) return;
@@ -191,7 +163,6 @@ json robotReport(const RobotSession& session, const Map& map, const session::Rob
                    {"reconnects", d.usb->reconnects()}};
   report["create_watchdog_stops"] = d.create->watchdogStops();
   if (recorder) report["recording"] = recorder->path();
-  if (!c.failure()) report["error"] = c.failure().error().message;
   return report;
 }
 
@@ -203,6 +174,62 @@ int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string
   if (!st) {
     err << "crunchhost: " << st.error().message << "\n";
     return 1;
+  }
+  return 0;
+}
+
+// The run on open devices: the controller, the loop, the shut-down in order, the outputs.
+int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& session, Devices& d,
+               io::RecordingWriter* recorder, std::chrono::steady_clock::time_point t0,
+               std::ostream& out, std::ostream& err) {
+  // The running map goes to a writer thread (session/map_output.h says why).
+  auto writer = std::make_unique<session::MapWriter>(
+      p.session.area_hi, opt.out_dir, "crunchhost --robot (running)",
+      [&err](const Error& e) { err << "crunchhost: " << e.message << "\n"; });
+  session::ControllerSources sources;
+  sources.poll_base = [&d](double timeout_s) { return d.create->poll(timeout_s); };
+  sources.drain_bridge = [&d](const auto& sink) { d.ring.drain(sink); };
+  sources.link = &d.link;
+  sources.watchdog_stops = [&d] { return d.create->watchdogStops(); };
+  sources.map = [&writer](Map map) { writer->post(std::move(map)); };
+  const session::EventSink progress = progressPrinter(opt.json_progress, out);
+  auto made = session::RobotController::create(*d.create, session, p.control, std::move(sources),
+                                               progress);
+  if (!made) {  // planRobot validated the options: not expected
+    err << "crunchhost: --robot: " << made.error().message << "\n";
+    return 2;
+  }
+  session::RobotController& controller = *made.value();
+  d.create->setByteTap([&controller](std::span<const std::uint8_t> b) { controller.handleBaseBytes(b); });
+  const StopSignals signals;  // from here to the end: SIGINT/SIGTERM stop the loop, not the process
+  controller.start("whisker bridge " + opt.usb + " at " + d.usb->devicePath() + ", Create on " +
+                   opt.create);
+  runLoop(controller, signals);
+
+  // ---- Shut down in order: motors, USB, the last chunks, the recording, the map.
+  controller.stopMotion();
+  writer.reset();  // waits for a write in progress; the final map is written below
+  d.usb->stop();
+  controller.drainBridge();
+  const Map map = session.finish();
+  const Status closed = recorder ? recorder->close() : okStatus();
+  const Status& failure = controller.failure() ? closed : controller.failure();
+  json report = robotReport(session, map, controller, d, recorder);
+  if (!failure) report["error"] = failure.error().message;
+  report["wall_s"] = secondsSince(t0);
+  if (writeOutputs(map, p.session, opt.out_dir,
+                   "crunchhost --robot, seed " + std::to_string(opt.seed), report, err) != 0) {
+    return 1;
+  }
+  progress({"done", d.create->now(),
+            controller.stopReason() + ": " + std::to_string(session.counts().whisks) +
+                " whisks, " + std::to_string(map.stats.shapelets) + " shapelets, " +
+                std::to_string(map.tables.size()) + " tables; wrote " + opt.out_dir +
+                "/{map.json,map.png,report.json}" +
+                (recorder ? " and " + recorder->path() : std::string())});
+  if (!failure) {
+    err << "crunchhost: --robot: " << failure.error().message << "\n";
+    return 3;
   }
   return 0;
 }
@@ -221,72 +248,20 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: " << plan.error().message << "\n";
     return 2;
   }
-  auto created = RobotSession::create(plan.value().session);
-  if (!created) {
-    err << "crunchhost: --robot: " << created.error().message << "\n";
+  auto session = RobotSession::create(plan.value().session);
+  if (!session) {
+    err << "crunchhost: --robot: " << session.error().message << "\n";
     return 2;
   }
-  const RobotPlan& p = plan.value();
-  RobotSession& session = *created.value();
   Devices d;  // ---- both devices are tried, every missing one named: exit 3
-  if (!openDevices(opt, p, d, err)) return 3;
-  auto recorder = openRecording(opt, p);
+  if (!openDevices(opt, plan.value(), d, err)) return 3;
+  auto recorder = openRecording(opt, plan.value());
   if (!recorder) {
     err << "crunchhost: " << recorder.error().message << "\n";
     return 1;
   }
-  session.setRecorder(recorder.value().get());
-
-  // ---- The control loop; the running map goes to a writer thread (map_output.h says why).
-  auto writer = std::make_unique<session::MapWriter>(
-      p.session.area_hi, opt.out_dir, "crunchhost --robot (running)",
-      [&err](const Error& e) { err << "crunchhost: " << e.message << "\n"; });
-  session::ControllerSources sources;
-  sources.poll_base = [&d](double timeout_s) { return d.create->poll(timeout_s); };
-  sources.drain_bridge = [&d](const auto& sink) { d.ring.drain(sink); };
-  sources.link = &d.link;
-  sources.watchdog_stops = [&d] { return d.create->watchdogStops(); };
-  sources.map = [&writer](Map map) { writer->post(std::move(map)); };
-  auto made = session::RobotController::create(*d.create, session, p.control, std::move(sources),
-                                               progressPrinter(opt.json_progress, out));
-  if (!made) {  // planRobot validated the options: not expected
-    err << "crunchhost: --robot: " << made.error().message << "\n";
-    return 2;
-  }
-  session::RobotController& controller = *made.value();
-  d.create->setByteTap([&controller](std::span<const std::uint8_t> b) { controller.handleBaseBytes(b); });
-  SignalGuard signals;  // from here to the end: SIGINT/SIGTERM stop the loop, not the process
-  controller.start("whisker bridge " + opt.usb + " at " + d.usb->devicePath() +
-                   ", Create on " + opt.create);
-  runLoop(controller);
-
-  // ---- Shut down in order: motors, USB, the last chunks, the recording, the map.
-  controller.stopMotion();
-  writer.reset();  // waits for a write in progress; the final map is written below
-  d.usb->stop();
-  controller.drainBridge();
-  const Map map = session.finish();
-  Status closed = recorder.value() ? recorder.value()->close() : okStatus();
-  json report = robotReport(session, map, controller, d, recorder.value().get());
-  if (!closed && controller.failure()) report["error"] = closed.error().message;
-  report["wall_s"] = secondsSince(t0);
-  if (writeOutputs(map, p.session, opt.out_dir,
-                   "crunchhost --robot, seed " + std::to_string(opt.seed), report, err) != 0) {
-    return 1;
-  }
-  progressPrinter(opt.json_progress, out)(
-      {"done", d.create->now(),
-       controller.stopReason() + ": " + std::to_string(session.counts().whisks) + " whisks, " +
-           std::to_string(map.stats.shapelets) + " shapelets, " +
-           std::to_string(map.tables.size()) + " tables; wrote " + opt.out_dir +
-           "/{map.json,map.png,report.json}" +
-           (recorder.value() ? " and " + recorder.value()->path() : std::string())});
-  const Status& failure = controller.failure() ? closed : controller.failure();
-  if (!failure) {
-    err << "crunchhost: --robot: " << failure.error().message << "\n";
-    return 3;
-  }
-  return 0;
+  session.value()->setRecorder(recorder.value().get());
+  return driveRobot(opt, plan.value(), *session.value(), d, recorder.value().get(), t0, out, err);
 }
 
 // ------------------------------------------------------------------------------------------
@@ -295,51 +270,34 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
 
 int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
   const auto t0 = std::chrono::steady_clock::now();
-  // ---- The recording's header and settings: exit 2, nothing written.
-  auto reader = io::RecordingReader::open(opt.recording);
-  if (!reader) {
-    err << "crunchhost: --replay: " << reader.error().message << "\n";
+  auto replayed = session::replayRecording(opt.recording);
+  if (!replayed) {  // the header or the settings: nothing written
+    err << "crunchhost: --replay: " << replayed.error().message << "\n";
     return 2;
   }
-  io::RecordingReader& rec = *reader.value();
-  auto sopt = session::sessionFromMetadata(rec.metadata(), "recording " + opt.recording);
-  auto created = sopt ? RobotSession::create(sopt.value())
-                      : Result<std::unique_ptr<RobotSession>>(sopt.error());
-  if (!created) {
-    err << "crunchhost: --replay: " << created.error().message << "\n";
-    return 2;
-  }
-  // ---- The records through the same session, in the same order: the same map.
-  RobotSession& session = *created.value();
-  io::Chunk chunk;
-  io::RecordingReader::Next next;
-  while ((next = rec.next(chunk)) == io::RecordingReader::Next::kRecord) {
-    (void)session.handle(chunk);  // no recorder: cannot fail
-  }
-  const bool damaged = next == io::RecordingReader::Next::kDamaged;
-  const Map map = session.finish();
-  json report = json::parse(session::sessionReportJson(session, map));
+  const session::Replay& r = replayed.value();
+  json report = json::parse(session::sessionReportJson(*r.session, r.map));
   report["mode"] = "replay";
   report["recording"] = opt.recording;
-  report["records"] = rec.records();
+  report["records"] = r.records;
   report["wall_s"] = secondsSince(t0);
-  if (damaged) report["damage"] = rec.damage();
-  if (writeOutputs(map, sopt.value(), opt.out_dir, "crunchhost --replay " + opt.recording, report,
+  if (!r.damage.empty()) report["damage"] = r.damage;
+  if (writeOutputs(r.map, r.options, opt.out_dir, "crunchhost --replay " + opt.recording, report,
                    err) != 0) {
     return 1;
   }
   if (opt.json_progress) {
-    out << json{{"event", "done"}, {"records", rec.records()}, {"tables", map.tables.size()},
-                {"damaged", damaged}}.dump()
+    out << json{{"event", "done"}, {"records", r.records}, {"tables", r.map.tables.size()},
+                {"damaged", !r.damage.empty()}}.dump()
         << "\n";
   } else {
-    out << "replayed " << rec.records() << " records of " << opt.recording << ": "
-        << session.counts().whisks << " whisks, " << map.stats.shapelets << " shapelets, "
-        << map.tables.size() << " tables; wrote " << opt.out_dir
+    out << "replayed " << r.records << " records of " << opt.recording << ": "
+        << r.session->counts().whisks << " whisks, " << r.map.stats.shapelets << " shapelets, "
+        << r.map.tables.size() << " tables; wrote " << opt.out_dir
         << "/{map.json,map.png,report.json}\n";
   }
-  if (damaged) {
-    err << "crunchhost: --replay: " << rec.damage() << "; replayed up to the damage\n";
+  if (!r.damage.empty()) {
+    err << "crunchhost: --replay: " << r.damage << "; replayed up to the damage\n";
     return 3;
   }
   return 0;
