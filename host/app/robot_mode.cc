@@ -193,14 +193,15 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
   sources.watchdog_stops = [&d] { return d.create->watchdogStops(); };
   sources.map = [&writer](Map map) { writer->post(std::move(map)); };
   const session::EventSink progress = progressPrinter(opt.json_progress, out);
-  auto made = session::RobotController::create(*d.create, session, p.control, std::move(sources),
-                                               progress);
+  auto made =
+      session::RobotController::create(*d.create, session, p.control, std::move(sources), progress);
   if (!made) {  // planRobot validated the options: not expected
     err << "crunchhost: --robot: " << made.error().message << "\n";
     return 2;
   }
   session::RobotController& controller = *made.value();
-  d.create->setByteTap([&controller](std::span<const std::uint8_t> b) { controller.handleBaseBytes(b); });
+  d.create->setByteTap(
+      [&controller](std::span<const std::uint8_t> b) { controller.handleBaseBytes(b); });
   const StopSignals signals;  // from here to the end: SIGINT/SIGTERM stop the loop, not the process
   controller.start("whisker bridge " + opt.usb + " at " + d.usb->devicePath() + ", Create on " +
                    opt.create);
@@ -222,8 +223,8 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
     return 1;
   }
   progress({"done", d.create->now(),
-            controller.stopReason() + ": " + std::to_string(session.counts().whisks) +
-                " whisks, " + std::to_string(map.stats.shapelets) + " shapelets, " +
+            controller.stopReason() + ": " + std::to_string(session.counts().whisks) + " whisks, " +
+                std::to_string(map.stats.shapelets) + " shapelets, " +
                 std::to_string(map.tables.size()) + " tables; wrote " + opt.out_dir +
                 "/{map.json,map.png,report.json}" +
                 (recorder ? " and " + recorder->path() : std::string())});
@@ -287,8 +288,11 @@ int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
     return 1;
   }
   if (opt.json_progress) {
-    out << json{{"event", "done"}, {"records", r.records}, {"tables", r.map.tables.size()},
-                {"damaged", !r.damage.empty()}}.dump()
+    out << json{{"event", "done"},
+                {"records", r.records},
+                {"tables", r.map.tables.size()},
+                {"damaged", !r.damage.empty()}}
+               .dump()
         << "\n";
   } else {
     out << "replayed " << r.records << " records of " << opt.recording << ": "

@@ -42,8 +42,8 @@ struct RobotOptions {
   std::string record_path;  // empty: OUT/recording.crec
   bool record = true;
   std::uint64_t seed = 1;
-  double duration_s = 0.0;      // 0: until SIGINT/SIGTERM
-  double map_every_s = 5.0;     // map.json/map.png rewritten this often
+  double duration_s = 0.0;   // 0: until SIGINT/SIGTERM
+  double map_every_s = 5.0;  // map.json/map.png rewritten this often
   double calibrate_timeout_s = 5.0;
   double area_width = 6.0, area_depth = 6.0;  // the mapped region, metres
   // The robot's start pose in the map frame; a negative x or y: the centre of the area.

@@ -13,7 +13,7 @@ namespace crunch::app {
 
 class StopSignals {
  public:
-  StopSignals();  // clears received(), installs the handler
+  StopSignals();   // clears received(), installs the handler
   ~StopSignals();  // restores the previous handlers
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;

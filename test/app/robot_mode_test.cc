@@ -40,7 +40,7 @@ std::string recordingWithWorkingMemory(const TempDir& dir, const json& working_m
 
 }  // namespace
 
-TEST_CASE("--replay: working_memory 0 in the recording's metadata is exit 2 naming it",
+TEST_CASE("Robot mode: --replay: working_memory 0 in the recording's metadata is exit 2 naming it",
           "[app]") {
   TempDir dir;
   app::ReplayOptions o;
@@ -54,7 +54,8 @@ TEST_CASE("--replay: working_memory 0 in the recording's metadata is exit 2 nami
   CHECK_FALSE(std::filesystem::exists(dir.file("out")));
 }
 
-TEST_CASE("--replay: a working_memory that is not a number is exit 2 naming it", "[app]") {
+TEST_CASE("Robot mode: --replay: a working_memory that is not a number is exit 2 naming it",
+          "[app]") {
   TempDir dir;
   app::ReplayOptions o;
   o.recording = recordingWithWorkingMemory(dir, "seven");
@@ -65,8 +66,9 @@ TEST_CASE("--replay: a working_memory that is not a number is exit 2 naming it",
   CHECK_FALSE(std::filesystem::exists(dir.file("out")));
 }
 
-TEST_CASE("--robot: a bad setting on the command line is exit 2 naming it, nothing opened",
-          "[app]") {
+TEST_CASE(
+    "Robot mode: --robot: a bad setting on the command line is exit 2 naming it, nothing opened",
+    "[app]") {
   TempDir dir;
   app::RobotOptions o;
   o.out_dir = dir.file("out");

@@ -73,8 +73,8 @@ class FakeRobot final : public MobileBase {
 
   sim::KinematicBase base;
   double deflection[4] = {0.0, 0.0, 0.0, 0.0};  // radians, in-plane, per whisker
-  bool plugged = true;   // the bridge's USB link
-  bool powered = true;   // the whisker boards
+  bool plugged = true;                          // the bridge's USB link
+  bool powered = true;                          // the whisker boards
   std::vector<Command> commands;
 
  private:
@@ -116,10 +116,9 @@ struct Rig {
     sources.watchdog_stops = [this] { return watchdog_stops; };
     sources.map = [this](Map) { ++maps; };
     sources.clock_ns = [this] { return robot.clockNs(); };
-    auto made = RobotController::create(robot, *session, options, std::move(sources),
-                                        [this](const session::ControllerEvent& e) {
-                                          events.push_back(e.name);
-                                        });
+    auto made = RobotController::create(
+        robot, *session, options, std::move(sources),
+        [this](const session::ControllerEvent& e) { events.push_back(e.name); });
     REQUIRE(made);
     controller = std::move(made).value();
   }
@@ -249,8 +248,7 @@ TEST_CASE("RobotController: a contact starts a body whisk with start and end mar
                                   static_cast<int>(io::MarkKind::kWhiskEnd)});
 }
 
-TEST_CASE("RobotController: the bridge lost pauses the robot; back, it roams again",
-          "[session]") {
+TEST_CASE("RobotController: the bridge lost pauses the robot; back, it roams again", "[session]") {
   Rig rig;
   rig.controller->start("test robot");
   REQUIRE(rig.stepUntil([&] { return rig.controller->stage() == Stage::kRoaming; }, 3.0));
@@ -285,8 +283,7 @@ TEST_CASE("RobotController: the bridge lost pauses the robot; back, it roams aga
   CHECK(rig.controller->failure());
 }
 
-TEST_CASE("RobotController: a watchdog stop is reported and the command sent again",
-          "[session]") {
+TEST_CASE("RobotController: a watchdog stop is reported and the command sent again", "[session]") {
   Rig rig;
   rig.controller->start("test robot");
   REQUIRE(rig.stepUntil([&] { return rig.controller->stage() == Stage::kRoaming; }, 3.0));

@@ -99,8 +99,8 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
   CHECK(meta["usb"] == "1209:0001");
   const json& st = meta["settings"];
   CHECK(st.size() == 6);
-  for (const char* key : {"seed", "start", "area", "checksum_includes_header", "onset_threshold",
-                          "mapping"}) {
+  for (const char* key :
+       {"seed", "start", "area", "checksum_includes_header", "onset_threshold", "mapping"}) {
     CHECK(st.contains(key));
   }
   CHECK(st["mapping"].size() == 10);

@@ -23,7 +23,8 @@ std::optional<LinkMonitor::Event> LinkMonitor::take() {
   return latest_;
 }
 
-BodyWhisk::Options roamingWhiskOptions(std::uint64_t seed, const std::vector<WhiskerMount>& mounts) {
+BodyWhisk::Options roamingWhiskOptions(std::uint64_t seed,
+                                       const std::vector<WhiskerMount>& mounts) {
   BodyWhisk::Options o;
   o.seed = seed;
   o.reverse_distance = 0.0;  // no reverse before the sweep: see the header

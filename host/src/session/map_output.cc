@@ -39,8 +39,12 @@ std::string sessionReportJson(const RobotSession& session, const Map& map) {
   const Pose2 p = session.pose();
   json shapelets = json::array();
   for (const Shapelet& sh : map.shapelets) {
-    shapelets.push_back({{"x", sh.x}, {"y", sh.y}, {"phi", sh.phi}, {"whisker", sh.whisker},
-                         {"pose", sh.pose_index}, {"from", {sh.ox, sh.oy}}});
+    shapelets.push_back({{"x", sh.x},
+                         {"y", sh.y},
+                         {"phi", sh.phi},
+                         {"whisker", sh.whisker},
+                         {"pose", sh.pose_index},
+                         {"from", {sh.ox, sh.oy}}});
   }
   const json report = {{"bridge",
                         {{"chunks", c.bridge_chunks},

@@ -145,8 +145,8 @@ void readSettings(const json& settings, RobotSessionOptions& s) {
 
 }  // namespace
 
-RobotSessionOptions sessionOptions(const signal::SignalModels& models, const MappingOptions& mapping,
-                                   std::uint64_t seed) {
+RobotSessionOptions sessionOptions(const signal::SignalModels& models,
+                                   const MappingOptions& mapping, std::uint64_t seed) {
   RobotSessionOptions s;
   s.models = models;
   s.pipeline = models.pipeline;  // the settings the models were trained with

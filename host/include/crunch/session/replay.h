@@ -19,11 +19,11 @@
 namespace crunch::session {
 
 struct Replay {
-  RobotSessionOptions options;             // as the metadata gave them
-  std::unique_ptr<RobotSession> session;   // after the last record and finish()
-  Map map;                                 // RobotSession::finish()
-  std::uint64_t records = 0;               // records replayed
-  std::string damage;                      // empty: the file ended cleanly
+  RobotSessionOptions options;            // as the metadata gave them
+  std::unique_ptr<RobotSession> session;  // after the last record and finish()
+  Map map;                                // RobotSession::finish()
+  std::uint64_t records = 0;              // records replayed
+  std::string damage;                     // empty: the file ended cleanly
 };
 
 // Errors (nothing replayed): the file cannot be opened or is not a recording (its header),

@@ -44,8 +44,8 @@ inline constexpr char kRecordingSchema[] = "crunch.recording/1";
 // callback, and eq. 12's shapelet sigmas set to the classifiers' measured errors (paper Table 1
 // all whiskers, Fig. 10), as `--sim --sensor-model physics` does. Start and area keep
 // RobotSessionOptions' defaults.
-RobotSessionOptions sessionOptions(const signal::SignalModels& models, const MappingOptions& mapping,
-                                   std::uint64_t seed);
+RobotSessionOptions sessionOptions(const signal::SignalModels& models,
+                                   const MappingOptions& mapping, std::uint64_t seed);
 
 // Where a recorded run came from: written into the metadata, not read back.
 struct RecordingProvenance {
