@@ -1,24 +1,25 @@
 // `crunchhost --robot` and `crunchhost --replay FILE` (ARCHITECTURE.md §4 command line; paper
-// §2.1-2.8 end to end on the real robot).
+// §2.1-2.8 end to end on the real robot). Parsing and wiring only: the running robot is the
+// library's session area (docs/ROBOT.md).
 //
-// --robot: opens the USB whisker bridge (io/usb_bridge.h) and the Create (io/create_base.h);
-// the USB thread puts the bridge's chunks into a lock-free SPSC ring (io/spsc_ring.h); the
-// control loop, one thread, polls the Create, drains the ring into the RobotSession (decoder,
-// sample assembler, signal pipeline, odometry, mapper; robot_session.h), runs the roaming body
-// whisk (behaviour/body_whisk.h) on the contact mask, and marks the end of each whisk. Every
-// chunk is recorded (io/recording.h) before it is processed; OUT/map.json and OUT/map.png are
-// rewritten every map_every_s seconds and at the end.
-//   Start: the robot stands still until every whisker's detector has calibrated its rest (at
-//   most calibrate_timeout_s), then roams.
-//   Unplugged bridge: the robot stops and says so, keeps everything it has, and roams again
-//   when the bridge is back (the decoder and assembler forget partial frames; marked in the
-//   recording). A Create that stops streaming ends the run (its error names the device).
+// --robot: the options become the library's settings (session::sessionOptions,
+// session::ControllerOptions; each validated by the library, its error naming the field); then
+// opens the USB whisker bridge (io/usb_bridge.h) and the Create (io/create_base.h); the USB
+// thread puts the bridge's chunks into a lock-free SPSC ring (io/spsc_ring.h) and its link state
+// into a session::LinkMonitor; the control loop, one thread, steps a session::RobotController
+// (session/controller.h: calibrating, roaming with the body whisk, paused while the bridge is
+// unplugged, whisk marks, watchdog stops) that polls the Create and drains the ring into the
+// RobotSession (decoder, sample assembler, signal pipeline, odometry, mapper;
+// session/robot_session.h). Every chunk is recorded (io/recording.h; the metadata is
+// session/session_settings.h) before it is processed; OUT/map.json and OUT/map.png are rewritten
+// every map_every_s seconds by a writer thread (session::MapWriter) and at the end.
 //   SIGINT/SIGTERM, --duration: stop the motors, flush the recording, write the map, exit 0.
 //
-// --replay: the recording's metadata holds the run's settings and models, so a replay needs
-// nothing else; the records go through the same RobotSession in the same order, which gives the
-// same map. A damaged recording replays up to the damage, which is reported; the map of what
-// was replayed is written and the exit status is 3.
+// --replay: session::replayRecording (session/replay.h): the recording's metadata holds the
+// run's settings and models, so a replay needs nothing else; the records go through the same
+// RobotSession in the same order, which gives the same map. A damaged recording replays up to
+// the damage, which is reported; the map of what was replayed is written and the exit status
+// is 3.
 //
 // Exit codes: 0 done; 2 bad option, models or recording header (nothing written); 3 a device
 // is missing or failed (the message names it and how to fix it), or the recording is damaged;
@@ -41,8 +42,8 @@ struct RobotOptions {
   std::string record_path;  // empty: OUT/recording.crec
   bool record = true;
   std::uint64_t seed = 1;
-  double duration_s = 0.0;      // 0: until SIGINT/SIGTERM
-  double map_every_s = 5.0;     // map.json/map.png rewritten this often
+  double duration_s = 0.0;   // 0: until SIGINT/SIGTERM
+  double map_every_s = 5.0;  // map.json/map.png rewritten this often
   double calibrate_timeout_s = 5.0;
   double area_width = 6.0, area_depth = 6.0;  // the mapped region, metres
   // The robot's start pose in the map frame; a negative x or y: the centre of the area.

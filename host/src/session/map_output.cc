@@ -1,0 +1,123 @@
+#include "crunch/session/map_output.h"
+
+#include <nlohmann/json.hpp>
+#include <utility>
+
+#include "crunch/core/atomic_file.h"
+#include "crunch/mapping/map_io.h"
+#include "crunch/render/map_render.h"
+#include "crunch/scene/scene.h"
+
+namespace crunch::session {
+
+using json = nlohmann::json;
+
+Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out_dir,
+                     const std::string& title) {
+  if (auto st = ensureDirectory(out_dir); !st) return st;
+  Scene area;  // the "truth" drawn is only the mapped area
+  area.width = area_hi.x();
+  area.depth = area_hi.y();
+  area.source = "robot";
+  RenderOptions ropt;
+  ropt.title = title;
+  if (auto st = writeFileAtomic(out_dir + "/map.json", mapToJson(map)); !st) return st;
+  return renderMapPng(map, area, out_dir + "/map.png", ropt);
+}
+
+std::string sessionReportJson(const RobotSession& session, const Map& map) {
+  const auto& d = session.decoderCounters();
+  const auto& a = session.assemblerCounters();
+  const auto& c = session.counts();
+  const auto& e = session.evidenceCounts();
+  const auto t = session.tracker().counters();
+  std::uint64_t lost = 0, dropped = 0;
+  for (const auto& b : d.boards) {
+    lost += b.lost_frames;
+    dropped += b.dropped_samples;
+  }
+  const Pose2 p = session.pose();
+  json shapelets = json::array();
+  for (const Shapelet& sh : map.shapelets) {
+    shapelets.push_back({{"x", sh.x},
+                         {"y", sh.y},
+                         {"phi", sh.phi},
+                         {"whisker", sh.whisker},
+                         {"pose", sh.pose_index},
+                         {"from", {sh.ox, sh.oy}}});
+  }
+  const json report = {{"bridge",
+                        {{"chunks", c.bridge_chunks},
+                         {"bytes", d.bytes},
+                         {"frames", d.frames},
+                         {"crc_failures", d.crc_failures},
+                         {"bad_version", d.bad_version},
+                         {"bad_board", d.bad_board},
+                         {"skipped_bytes", d.skipped_bytes},
+                         {"lost_frames", lost},
+                         {"dropped_samples", dropped}}},
+                       {"samples",
+                        {{"assembled", a.samples},
+                         {"gap_placeholders", a.placeholders},
+                         {"silent_fills", a.silent_fills},
+                         {"unmapped_frames", a.unmapped_frames}}},
+                       {"create",
+                        {{"chunks", c.create_chunks},
+                         {"packets", t.stream.packets},
+                         {"checksum_failures", t.stream.checksum_failures},
+                         {"bad_length_or_id", t.stream.bad_length_or_id},
+                         {"skipped_bytes", t.stream.skipped_bytes}}},
+                       {"contacts",
+                        {{"episodes", c.episodes},
+                         {"roaming_episodes", c.roaming_episodes},
+                         {"whisks", c.whisks},
+                         {"reports", c.reports},
+                         {"no_radial", e.no_radial},
+                         {"no_orientation", e.no_orientation}}},
+                       {"final_pose", {p.x, p.y, p.theta}},
+                       {"map", {{"tables", map.tables.size()}, {"shapelets", map.stats.shapelets}}},
+                       {"shapelets", shapelets}};
+  return report.dump();
+}
+
+MapWriter::MapWriter(const Vec2& area_hi, std::string out_dir, std::string title,
+                     std::function<void(const Error&)> on_error)
+    : area_hi_(area_hi),
+      out_dir_(std::move(out_dir)),
+      title_(std::move(title)),
+      on_error_(std::move(on_error)),
+      thread_([this] { loop(); }) {}
+
+MapWriter::~MapWriter() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  cv_.notify_one();
+  thread_.join();
+}
+
+void MapWriter::post(Map map) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    pending_ = std::move(map);
+  }
+  cv_.notify_one();
+}
+
+void MapWriter::loop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    cv_.wait(lock, [this] { return stop_ || pending_.has_value(); });
+    if (stop_) return;
+    Map map = std::move(*pending_);
+    pending_.reset();
+    lock.unlock();  // the write runs unlocked: post() never waits for a render or an fsync
+    if (auto st = writeMapFiles(map, area_hi_, out_dir_, title_); !st && on_error_) {
+      on_error_(st.error());
+    }
+    lock.lock();
+  }
+}
+
+}  // namespace crunch::session
