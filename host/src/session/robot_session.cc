@@ -20,13 +20,14 @@ Status RobotSessionOptions::validate() const {
   if (auto s = chainOptions(*this).validate(); !s) return s;
   if (auto s = within("mapping", mapping.validate()); !s) return s;
   const Status checks[] = {
-      checkRange("start.x", start.x, -1e3, 1e3),
-      checkRange("start.y", start.y, -1e3, 1e3),
-      checkRange("start.theta", start.theta, -1e3, 1e3),
+      // The area first: a start placed at a bad area's centre is bad because of the area.
       checkRange("area.lo.x", area_lo.x(), -1e3, 1e3),
       checkRange("area.lo.y", area_lo.y(), -1e3, 1e3),
       checkRange("area width (area.hi.x - area.lo.x)", area_hi.x() - area_lo.x(), 0.5, kMaxAreaSide),
-      checkRange("area depth (area.hi.y - area.lo.y)", area_hi.y() - area_lo.y(), 0.5, kMaxAreaSide)};
+      checkRange("area depth (area.hi.y - area.lo.y)", area_hi.y() - area_lo.y(), 0.5, kMaxAreaSide),
+      checkRange("start.x", start.x, -1e3, 1e3),
+      checkRange("start.y", start.y, -1e3, 1e3),
+      checkRange("start.theta", start.theta, -1e3, 1e3)};
   for (const Status& s : checks) {
     if (!s) return s;
   }

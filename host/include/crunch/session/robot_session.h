@@ -18,7 +18,8 @@
 // Which contacts are reported: the episodes that end between a kWhiskStart mark (the toward
 // leg begins: SensingChain::beginWhisk) and the kWhiskEnd mark (SensingChain::endWhisk) — the
 // body whisk's own, including the episode of the contact that started it, which the sweep
-// continues (the robot stops on the contact and whisks without reversing: see robot_mode.h).
+// continues (the robot stops on the contact and whisks without reversing: see
+// roamingWhiskOptions in session/controller.h).
 // Episodes that end outside a whisk (a whisker brushing something while the robot drives or
 // turns) are counted (RobotSessionCounts::roaming_episodes) and not reported: the radial model
 // was trained on sweeps, not on pushes. Rays swept free count at all times (negative evidence).
