@@ -1,29 +1,42 @@
-// crunchhost: the CrunchBot host program (ARCHITECTURE.md §4 command line).
+// crunchhost: the CrunchBot host program (ARCHITECTURE.md §4 command line). Parsing and wiring
+// only: each mode's options are set up by one function below and handed to the mode, which
+// calls the library. The simulator modes (--sim, sweep, train) live in sim/app/ (crunch_sim_app)
+// and are included by plain name; nothing here includes the simulator's headers.
 #include <CLI/CLI.hpp>
 #include <iostream>
 
 #include "robot_mode.h"
 #include "sim_mode.h"
 #include "sweep_chart.h"
+#include "sweep_merge.h"
 #include "sweep_mode.h"
 #include "train_mode.h"
 
-int main(int argc, char** argv) {
-  CLI::App app{"crunchhost: map table-like objects by touch with a whiskered robot"};
-  app.set_version_flag("--version", "crunchhost 0.1.0");
+namespace {
+
+using namespace crunch::app;
+
+// The mode flags and the options --sim and --robot share.
+struct TopLevel {
   bool sim = false, robot = false;
-  crunch::app::SimOptions opt;
-  std::string scene;
-  auto* mode_sim = app.add_flag("--sim", sim, "run the ODE simulator and map its world");
-  auto* mode_robot = app.add_flag("--robot", robot, "run the real robot (USB whisker bridge + Create)");
-  mode_sim->excludes(mode_robot);
   std::string replay;
-  auto* mode_replay = app.add_option("--replay", replay,
+  std::string scene;
+  SimOptions sim_opt;  // --sim's options; --robot takes the shared ones from it
+};
+
+void addModes(CLI::App& app, TopLevel& t) {
+  auto* mode_sim = app.add_flag("--sim", t.sim, "run the ODE simulator and map its world");
+  auto* mode_robot =
+      app.add_flag("--robot", t.robot, "run the real robot (USB whisker bridge + Create)");
+  mode_sim->excludes(mode_robot);
+  auto* mode_replay = app.add_option("--replay", t.replay,
                                      "re-run a recording of --robot offline (same map)")
                           ->check(CLI::ExistingFile);
   mode_replay->excludes(mode_sim)->excludes(mode_robot);
-  // --robot (robot_mode.h, docs/ROBOT.md)
-  crunch::app::RobotOptions ropt;
+}
+
+// --robot (robot_mode.h, docs/ROBOT.md).
+void addRobotOptions(CLI::App& app, RobotOptions& ropt) {
   auto* robot_opts = app.add_option_group("robot", "options of --robot");
   robot_opts->add_option("--usb", ropt.usb, "USB id VID:PID of the whisker bridge")
       ->capture_default_str();
@@ -49,21 +62,19 @@ int main(int argc, char** argv) {
   robot_opts->add_flag("!--checksum-per-manual", ropt.checksum_includes_header,
                        "the Create's checksum excludes the header byte, as its manual says "
                        "(default: includes it, as the Create 1 does)");
-  app.add_option("--scene", scene, "scene file (JSON, ARCHITECTURE.md §4); default: built-in arena")
+}
+
+// --sim's own options (sim_mode.h).
+void addSimOptions(CLI::App& app, TopLevel& t) {
+  SimOptions& opt = t.sim_opt;
+  app.add_option("--scene", t.scene, "scene file (JSON, ARCHITECTURE.md §4); default: built-in arena")
       ->check(CLI::ExistingFile);
   app.add_option("--sensor-model", opt.sensor_model, "physics | gaussian | ideal")
       ->check(CLI::IsMember({"physics", "gaussian", "ideal"}))
       ->capture_default_str();
-  app.add_option("--models", opt.models_path,
-                 "signal models for --sensor-model physics (default: the shipped "
-                 "models/sim_models.json)")
-      ->check(CLI::ExistingFile);
   app.add_option("--noise", opt.noise, "ideal | realistic | noisy")
       ->check(CLI::IsMember({"ideal", "realistic", "noisy"}))
       ->capture_default_str();
-  app.add_option("--seed", opt.seed, "seed of every random choice")->capture_default_str();
-  app.add_option("--out", opt.out_dir, "output directory")->capture_default_str();
-  app.add_flag("--json", opt.json_progress, "machine-readable progress on stdout");
   app.add_option("--snapshot", opt.snapshot_pose,
                  "also write OUT/snapshot_K.{png,svg}: the blackboard after the annealing of "
                  "pose K (0-based, in the run's order of reachable poses), like the paper's "
@@ -71,6 +82,17 @@ int main(int argc, char** argv) {
   app.add_option("--snapshot-temperature", opt.snapshot_temperature,
                  "with --snapshot: after the I-th temperature of pose K's annealing (0 the "
                  "hottest ... schedule-steps - 1 the coldest) instead of at its end (Fig. 4)");
+}
+
+// The options --sim and --robot share: models, seed, output, progress and the mapping settings.
+void addSharedOptions(CLI::App& app, SimOptions& opt) {
+  app.add_option("--models", opt.models_path,
+                 "signal models for --sensor-model physics (default: the shipped "
+                 "models/sim_models.json)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--seed", opt.seed, "seed of every random choice")->capture_default_str();
+  app.add_option("--out", opt.out_dir, "output directory")->capture_default_str();
+  app.add_flag("--json", opt.json_progress, "machine-readable progress on stdout");
   auto& s = opt.mapping.sampler;
   app.add_option("--schedule-steps", s.schedule_steps, "annealing temperatures")
       ->capture_default_str();
@@ -93,60 +115,124 @@ int main(int argc, char** argv) {
   app.add_option("--global-chains", opt.mapping.global_chains,
                  "independent chains of the global inference; a table needs half to agree")
       ->capture_default_str();
-  // `crunchhost train`: the paper's training protocols in the simulator (docs/TRAINING.md).
-  crunch::app::TrainOptions train_opt;
+}
+
+// `crunchhost train`: the paper's training protocols in the simulator (docs/TRAINING.md).
+CLI::App* addTrain(CLI::App& app, TrainOptions& o) {
   auto* train = app.add_subcommand(
       "train", "collect the paper's training contacts in the simulator, fit and evaluate the "
                "signal models, write them and the paper's figures (docs/TRAINING.md)");
-  train->add_option("--out", train_opt.out_dir, "output directory")->capture_default_str();
-  train->add_option("--seed", train_opt.seed, "seed of every jitter and sensor noise")
+  train->add_option("--out", o.out_dir, "output directory")->capture_default_str();
+  train->add_option("--seed", o.seed, "seed of every jitter and sensor noise")
       ->capture_default_str();
-  train->add_option("--models-out", train_opt.models_out,
+  train->add_option("--models-out", o.models_out,
                     "also write the models here (e.g. models/sim_models.json)");
-  train->add_option("--radial-f1", train_opt.radial_f1,
+  train->add_option("--radial-f1", o.radial_f1,
                     "f1 of the saved radial lines: max (over the whisk, as the mapper takes "
                     "it) | first (the first pass)")
       ->check(CLI::IsMember({"max", "first"}))
       ->capture_default_str();
-  train->add_flag("--json", train_opt.json_progress, "machine-readable progress on stdout");
-  // `crunchhost sweep` / `sweep-merge` (sweep_mode.h, docs/RESULTS.md "Sweeps").
-  crunch::app::SweepOptions sweep_opt;
+  train->add_flag("--json", o.json_progress, "machine-readable progress on stdout");
+  return train;
+}
+
+// `crunchhost sweep` (sweep_mode.h, docs/RESULTS.md "Sweeps").
+CLI::App* addSweep(CLI::App& app, SweepOptions& o) {
   auto* sweep = app.add_subcommand(
       "sweep", "map a grid of scenes x noise x sampler budgets x seeds with the gaussian (fast, "
                "ray-cast) sensor model, one row per run in OUT/sweep.csv and OUT/sweep.json "
                "(docs/RESULTS.md)");
-  sweep->add_option("--scene", sweep_opt.scenes,
+  sweep->add_option("--scene", o.scenes,
                     "scene file, repeatable; the word 'default' is the built-in arena "
                     "(default: default)");
-  sweep->add_option("--noise", sweep_opt.noise, "noise regimes, e.g. ideal,realistic,noisy");
-  sweep->add_option("--noise-scale", sweep_opt.noise_scale,
+  sweep->add_option("--noise", o.noise, "noise regimes, e.g. ideal,realistic,noisy");
+  sweep->add_option("--noise-scale", o.noise_scale,
                     "noise as multiples of realistic (sigma_r 5 mm, sigma_phi pi/32), e.g. "
                     "0.5,1,2,5,10 (neither: realistic)");
-  sweep->add_option("--schedule-steps", sweep_opt.schedule_steps,
+  sweep->add_option("--schedule-steps", o.schedule_steps,
                     "annealing temperatures, e.g. 4,8,16 (default 16)");
-  sweep->add_option("--sweeps", sweep_opt.sweeps, "sweeps per temperature, e.g. 1,2,4 (default 1)");
-  sweep->add_option("--working-memory", sweep_opt.working_memory,
+  sweep->add_option("--sweeps", o.sweeps, "sweeps per temperature, e.g. 1,2,4 (default 1)");
+  sweep->add_option("--working-memory", o.working_memory,
                     "shapelets in working memory, e.g. 7,14 (default 7)");
-  sweep->add_option("--seeds", sweep_opt.seeds, "N: seeds 1..N (default 1)");
-  sweep->add_option("--seed-list", sweep_opt.seed_list, "explicit seeds, e.g. 3,7,11");
-  sweep->add_option("--jobs", sweep_opt.jobs, "worker threads (default: one per core)");
-  sweep->add_option("--shard", sweep_opt.shard,
+  sweep->add_option("--seeds", o.seeds, "N: seeds 1..N (default 1)");
+  sweep->add_option("--seed-list", o.seed_list, "explicit seeds, e.g. 3,7,11");
+  sweep->add_option("--jobs", o.jobs, "worker threads (default: one per core)");
+  sweep->add_option("--shard", o.shard,
                     "i/n: run only grid points with index % n == i (e.g. a Slurm array task)");
-  sweep->add_option("--out", sweep_opt.out_dir, "output directory")->capture_default_str();
-  sweep->add_flag("--json", sweep_opt.json_progress, "JSON progress lines on stdout");
-  std::vector<std::string> merge_dirs;
-  std::string merge_out = "out";
-  auto* sweep_merge = app.add_subcommand(
+  sweep->add_option("--out", o.out_dir, "output directory")->capture_default_str();
+  sweep->add_flag("--json", o.json_progress, "JSON progress lines on stdout");
+  return sweep;
+}
+
+struct MergeOptions {
+  std::vector<std::string> dirs;
+  std::string out = "out";
+};
+
+// `crunchhost sweep-merge` (sweep_merge.h).
+CLI::App* addSweepMerge(CLI::App& app, MergeOptions& o) {
+  auto* merge = app.add_subcommand(
       "sweep-merge", "join the sweep.csv/json of `sweep --shard` runs into one, in grid order");
-  sweep_merge->add_option("dirs", merge_dirs, "output directories of the shards")->required();
-  sweep_merge->add_option("--out", merge_out, "output directory")->capture_default_str();
-  // `crunchhost sweep-chart` (sweep_chart.h, docs/RESULTS.md "Charts").
-  crunch::app::SweepChartOptions chart_opt;
-  auto* sweep_chart = app.add_subcommand(
+  merge->add_option("dirs", o.dirs, "output directories of the shards")->required();
+  merge->add_option("--out", o.out, "output directory")->capture_default_str();
+  return merge;
+}
+
+// `crunchhost sweep-chart` (sweep_chart.h, docs/RESULTS.md "Charts").
+CLI::App* addSweepChart(CLI::App& app, SweepChartOptions& o) {
+  auto* chart = app.add_subcommand(
       "sweep-chart", "draw a sweep's accuracy-against-cost (Pareto) and accuracy-against-noise "
                      "charts, PNG and SVG, from DIR/sweep.json");
-  sweep_chart->add_option("--in", chart_opt.in_dir, "directory holding sweep.json")->required();
-  sweep_chart->add_option("--out", chart_opt.out_dir, "output directory (default: --in)");
+  chart->add_option("--in", o.in_dir, "directory holding sweep.json")->required();
+  chart->add_option("--out", o.out_dir, "output directory (default: --in)");
+  return chart;
+}
+
+// --replay, --robot or --sim, with the options they share.
+int runTopLevel(TopLevel& t, RobotOptions& ropt) {
+  SimOptions& opt = t.sim_opt;
+  if (!t.replay.empty()) {
+    ReplayOptions rp;
+    rp.recording = t.replay;
+    rp.out_dir = opt.out_dir;
+    rp.json_progress = opt.json_progress;
+    return runReplay(rp, std::cout, std::cerr);
+  }
+  if (t.robot) {
+    ropt.out_dir = opt.out_dir;
+    ropt.seed = opt.seed;
+    ropt.models_path = opt.models_path;
+    ropt.json_progress = opt.json_progress;
+    ropt.mapping = opt.mapping;
+    return runRobot(ropt, std::cout, std::cerr);
+  }
+  if (!t.sim) {
+    std::cerr << "crunchhost: choose a mode: --sim, --robot or --replay FILE (see --help)\n";
+    return 2;
+  }
+  if (!t.scene.empty()) opt.scene_path = t.scene;
+  return runSim(opt, std::cout, std::cerr);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"crunchhost: map table-like objects by touch with a whiskered robot"};
+  app.set_version_flag("--version", "crunchhost 0.1.0");
+  TopLevel top;
+  RobotOptions ropt;
+  TrainOptions train_opt;
+  SweepOptions sweep_opt;
+  MergeOptions merge_opt;
+  SweepChartOptions chart_opt;
+  addModes(app, top);
+  addRobotOptions(app, ropt);
+  addSimOptions(app, top);
+  addSharedOptions(app, top.sim_opt);
+  CLI::App* train = addTrain(app, train_opt);
+  CLI::App* sweep = addSweep(app, sweep_opt);
+  CLI::App* sweep_merge = addSweepMerge(app, merge_opt);
+  CLI::App* sweep_chart = addSweepChart(app, chart_opt);
   // The contract's exit codes (ARCHITECTURE.md §4): a command line CLI11 cannot parse is bad
   // input, exit 2 (CLI11's own codes are 100 and up); --help and --version exit 0.
   try {
@@ -155,42 +241,22 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   }
+  const bool top_mode = top.sim || top.robot || !top.replay.empty();
   if (*sweep || *sweep_merge || *sweep_chart) {
-    if (sim || robot || !replay.empty()) {
+    if (top_mode) {
       std::cerr << "crunchhost: sweep is a mode of its own: drop --sim/--robot/--replay\n";
       return 2;
     }
-    if (*sweep_chart) return crunch::app::runSweepChart(chart_opt, std::cout, std::cerr);
-    if (*sweep_merge) return crunch::app::runSweepMerge(merge_dirs, merge_out, std::cout, std::cerr);
-    return crunch::app::runSweep(sweep_opt, std::cout, std::cerr);
+    if (*sweep_chart) return runSweepChart(chart_opt, std::cout, std::cerr);
+    if (*sweep_merge) return runSweepMerge(merge_opt.dirs, merge_opt.out, std::cout, std::cerr);
+    return runSweep(sweep_opt, std::cout, std::cerr);
   }
   if (*train) {
-    if (sim || robot) {
+    if (top.sim || top.robot) {
       std::cerr << "crunchhost: train is a mode of its own: drop --sim/--robot\n";
       return 2;
     }
-    return crunch::app::runTrain(train_opt, std::cout, std::cerr);
+    return runTrain(train_opt, std::cout, std::cerr);
   }
-
-  if (!replay.empty()) {
-    crunch::app::ReplayOptions rp;
-    rp.recording = replay;
-    rp.out_dir = opt.out_dir;
-    rp.json_progress = opt.json_progress;
-    return crunch::app::runReplay(rp, std::cout, std::cerr);
-  }
-  if (robot) {
-    ropt.out_dir = opt.out_dir;
-    ropt.seed = opt.seed;
-    ropt.models_path = opt.models_path;
-    ropt.json_progress = opt.json_progress;
-    ropt.mapping = opt.mapping;
-    return crunch::app::runRobot(ropt, std::cout, std::cerr);
-  }
-  if (!sim) {
-    std::cerr << "crunchhost: choose a mode: --sim, --robot or --replay FILE (see --help)\n";
-    return 2;
-  }
-  if (!scene.empty()) opt.scene_path = scene;
-  return crunch::app::runSim(opt, std::cout, std::cerr);
+  return runTopLevel(top, ropt);
 }

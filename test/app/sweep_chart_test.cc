@@ -1,6 +1,6 @@
-// crunchhost sweep-chart (host/app/sweep_chart.h): the Pareto front on hand-made points, the
-// averaging over seeds, the files drawn from a small synthetic sweep.json written here (no real
-// sweep runs), and bad input (exit 2, a message naming the file, nothing written).
+// crunchhost sweep-chart (host/app/sweep_chart.h): the files drawn from a small synthetic
+// sweep.json written here (no real sweep runs), and bad input (exit 2, a message naming the file,
+// nothing written). The statistics themselves: test/mapping/sweep_statistics_test.cc.
 #include "sweep_chart.h"
 
 #include <catch2/catch.hpp>
@@ -81,42 +81,6 @@ Json synthetic() {
 }
 
 }  // namespace
-
-TEST_CASE("paretoFront: the settings no other beats on both cost and accuracy", "[sweep_chart]") {
-  //            0    1    2    3    4    5    6
-  const std::vector<double> cost = {1.0, 2.0, 3.0, 2.5, 4.0, 0.5, 2.0};
-  const std::vector<double> acc = {0.5, 0.7, 0.9, 0.6, 0.9, 0.2, 0.7};
-  // 3 is beaten by 1 (cheaper, better); 4 by 2 (same accuracy, cheaper); 1 and 6 are identical:
-  // neither beats the other. Sorted by cost.
-  CHECK(app::paretoFront(cost, acc) == std::vector<size_t>{5, 0, 1, 6, 2});
-  CHECK(app::paretoFront({}, {}).empty());
-  CHECK(app::paretoFront({1.0}, {0.0}) == std::vector<size_t>{0});
-  // Equal cost: only the more accurate one. Equal accuracy: only the cheaper one.
-  CHECK(app::paretoFront({1.0, 1.0}, {0.3, 0.4}) == std::vector<size_t>{1});
-  CHECK(app::paretoFront({2.0, 1.0}, {0.4, 0.4}) == std::vector<size_t>{1});
-  // A NaN point is never on the front and beats nothing.
-  const double nan = std::nan("");
-  CHECK(app::paretoFront({nan, 2.0, 1.0}, {1.0, 0.5, 0.1}) == std::vector<size_t>{2, 1});
-}
-
-TEST_CASE("loadSweepSummary averages each setting over its seeds, in grid order",
-          "[sweep_chart]") {
-  TempDir dir;
-  write(dir.file("sweep.json"), synthetic().dump());
-  const auto s = app::loadSweepSummary(dir.file("sweep.json"));
-  REQUIRE(s);
-  REQUIRE(s.value().size() == 8);
-  const app::SettingSummary& first = s.value()[0];
-  CHECK(first.noise == "realistic");
-  CHECK(first.schedule_steps == 4);
-  CHECK(first.runs == 2);
-  CHECK(first.f1_mean == Approx(0.5));
-  CHECK(first.f1_sd == Approx(0.1 * std::sqrt(2.0)));
-  CHECK(first.wall_s_mean == Approx(0.2));
-  CHECK(s.value()[3].isPaperSetting());
-  CHECK(s.value()[4].noise == "noisy");
-  CHECK(s.value()[4].f1_mean == Approx(0.125));
-}
 
 TEST_CASE("sweep-chart draws the Pareto and noise charts and a summary", "[sweep_chart]") {
   TempDir in, out;

@@ -37,6 +37,17 @@ foreach(area IN LISTS areas)
   endforeach()
 endforeach()
 
+# The app (host/app): parsing and wiring of the modes that need no simulator; the simulator's
+# modes are sim/app/, which crunchhost links and includes by plain name.
+file(GLOB app_files "${SOURCE_DIR}/host/app/*.h" "${SOURCE_DIR}/host/app/*.cc")
+foreach(f IN LISTS app_files)
+  math(EXPR checked "${checked} + 1")
+  file(STRINGS "${f}" lines REGEX "^#include \"crunch_sim/")
+  foreach(line IN LISTS lines)
+    list(APPEND violations "${f}: ${line} (host/app never includes the simulator: sim/app/ does)")
+  endforeach()
+endforeach()
+
 if(checked EQUAL 0)
   message(FATAL_ERROR "layering: no files found under ${SOURCE_DIR}/host")
 endif()

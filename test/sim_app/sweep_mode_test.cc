@@ -1,9 +1,11 @@
-// crunchhost sweep / sweep-merge (host/app/sweep_mode.h): determinism, shards and merge, threads,
+// crunchhost sweep / sweep-merge (sim/app/sweep_mode.h, host/app/sweep_merge.h): determinism, shards and merge, threads,
 // CSV = JSON, bad input. The grid is tiny: two_tables.json (24 candidate poses) at schedule 4 and
 // 8 x seeds 1 and 2 = 4 runs.
 #include "sweep_mode.h"
 
+#include "crunch/mapping/sweep.h"
 #include "sim_mode.h"
+#include "sweep_merge.h"
 
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -190,11 +192,11 @@ TEST_CASE("sweep: CSV and JSON hold the same rows", "[app][sweep]") {
   const Json j = rows(d.path().string());
   const auto table = csvCells(slurp(d.file("sweep.csv")));
   REQUIRE(table.size() == j.size() + 1);
-  REQUIRE(table[0] == app::kSweepColumns);
+  REQUIRE(table[0] == kSweepColumns);
   for (size_t r = 0; r < j.size(); ++r) {
-    REQUIRE(table[r + 1].size() == app::kSweepColumns.size());
-    for (size_t c = 0; c < app::kSweepColumns.size(); ++c) {
-      const Json& v = j[r][app::kSweepColumns[c]];
+    REQUIRE(table[r + 1].size() == kSweepColumns.size());
+    for (size_t c = 0; c < kSweepColumns.size(); ++c) {
+      const Json& v = j[r][kSweepColumns[c]];
       const std::string& cell = table[r + 1][c];
       if (v.is_string()) CHECK(cell == v.get<std::string>());
       else CHECK(Json::parse(cell) == v);

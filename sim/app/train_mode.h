@@ -3,10 +3,11 @@
 //
 //   crunchhost train [--out DIR] [--seed N] [--models-out FILE] [--radial-f1 max|first] [--json]
 //
-// Collects the radial and orientation contacts with sim::collectTrainingData, fits eq. 2 per
-// whisker on the radial training set and scores it on the held-out set, cross-validates the
-// orientation templates leave-one-repeat-out and trains the final templates on every repeat,
-// then writes
+// Wiring only: collects the radial and orientation contacts with sim::collectTrainingData
+// (crunch_sim/training.h), fits and evaluates the models and draws the figures with
+// crunch_sim/training_report.h (eq. 2 per whisker on the radial training set, scored on the
+// held-out set; the orientation templates cross-validated leave-one-repeat-out and trained on
+// every repeat), then writes
 //   DIR/models.json            the signal models (models_io.h), also copied to --models-out
 //   DIR/training_report.json   every number: options, per-contact data, both distance labels,
 //                              every radial variant, per-angle errors, counts, timings

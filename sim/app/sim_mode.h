@@ -1,6 +1,8 @@
-// `crunchhost --sim`: the simulated mapping run (ARCHITECTURE.md §4 command line).
-// Loads the scene (or the built-in default arena), builds the ODE world, senses every reachable
-// pose, runs the blackboard, and writes OUT/map.json, OUT/map.png and OUT/report.json.
+// `crunchhost --sim`: the simulated mapping run (ARCHITECTURE.md §4 command line). Wiring only:
+// the options go to the simulator library's run (crunch_sim/sim_run.h: scene, ODE world, every
+// reachable pose sensed, the blackboard, evaluation), which validates them; this writes
+// OUT/map.json, OUT/map.png and OUT/report.json (crunch_sim/sim_report.h), and with --snapshot
+// OUT/snapshot_K.{png,svg}.
 #pragma once
 
 #include <cstdint>

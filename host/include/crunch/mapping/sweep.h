@@ -1,0 +1,137 @@
+// The sweep grid of `crunchhost sweep` (issue 6, "Sweeps"; docs/RESULTS.md "Sweeps"): the lists
+// of settings to map, their parsing and validation, the grid's fingerprint, one row per grid
+// point and the sweep.csv / sweep.json files, and the merge of sharded sweeps. Running the
+// points needs the simulator (crunch_sim/sweep_run.h); nothing here does.
+//
+// A sweep is the grid scenes x noise x schedule_steps x sweeps x working_memory x seeds; each grid
+// point is one mapping run with the gaussian (ray-cast) sensor model — the fast one; the physics
+// sensor is not swept — at the point's noise regime, with default MappingOptions otherwise. Grid
+// order, the order of the rows: scene (slowest), noise (the named regimes, then the scales),
+// schedule_steps, sweeps, working_memory, seed (fastest); a point's grid_index is its position in
+// that order.
+//
+// Files: sweep.csv and sweep.json (a JSON array of objects with the same columns, in the same
+// order, with the same values: CSV numbers are the JSON numbers' text). Columns (kSweepColumns):
+// the grid fingerprint (a 64-bit FNV-1a hash, hex, of the grid description: every scene's
+// argument and file content, the noise sigmas, the budget lists, the seeds and the fixed mapping
+// options), grid_index, grid_size, shard ("i/n", "0/1" unsharded), the point's settings, accuracy
+// (Evaluation), cost (proposals, the mapping's high-water marks MapStats::peak_live_tables /
+// peak_live_legs, wall_s of the run's sensing + inference + evaluation) and
+// process_peak_rss_kib: the PROCESS's peak resident set when the row finished, shared by every
+// run of the process (not a per-run figure; it only grows down the rows).
+//
+// Errors: every parse and check returns an Error naming the option ("--noise", "--seeds", ...),
+// or for a merge the directory or file at fault.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "crunch/core/result.h"
+#include "crunch/mapping/evaluation.h"
+#include "crunch/mapping/map.h"
+#include "crunch/mapping/mapping_options.h"
+#include "crunch/mapping/sensor_model.h"
+#include "crunch/scene/scene.h"
+
+namespace crunch {
+
+// The columns of sweep.csv / keys of every sweep.json object, in order.
+extern const std::vector<std::string> kSweepColumns;
+
+// The grid's lists exactly as on the command line, comma-separated; empty text = the default.
+struct SweepGridSpec {
+  // Scene files; the word "default" is the built-in arena. Empty: {"default"}.
+  std::vector<std::string> scenes;
+  std::string noise;           // ideal,realistic,noisy names (default: realistic, if no scale)
+  std::string noise_scale;     // multiples of realistic's sigma_r = 5 mm and sigma_phi = pi/32
+  std::string schedule_steps;  // SamplerOptions::schedule_steps values (default 16)
+  std::string sweeps;          // SamplerOptions::sweeps_per_temperature values (default 1)
+  std::string working_memory;  // MappingOptions::working_memory values (default 7)
+  std::string seeds;           // N >= 1: seeds 1..N
+  std::string seed_list;       // explicit seeds (excludes seeds); neither: seed 1
+};
+
+struct SweepScene {
+  std::string arg;  // as given: a path or "default"
+  Scene scene;
+};
+
+// One grid point: indices into SweepGrid::scenes / noises, and the point's values.
+struct SweepPoint {
+  std::size_t scene = 0, noise = 0;
+  int schedule_steps = 0, sweeps = 0, working_memory = 0;
+  std::uint64_t seed = 0;
+};
+
+struct SweepGrid {
+  std::vector<SweepScene> scenes;
+  std::vector<NoiseRegime> noises;
+  std::vector<int> schedule_steps, sweeps, working_memory;
+  std::vector<std::uint64_t> seeds;
+  std::string fingerprint;  // 16 hex digits
+
+  std::size_t size() const;
+  // Index -> point, seed fastest, scene slowest. Requires index < size().
+  SweepPoint pointAt(std::size_t index) const;
+  // The point's mapping settings: defaults, with the point's seed, schedule_steps, sweeps and
+  // working_memory. Valid: buildSweepGrid validated every point. (The run raises eq. 12's
+  // shapelet sigmas to the point's noise, withSensorNoise, as every simulated run does.)
+  MappingOptions mappingOptions(const SweepPoint& point) const;
+};
+
+// Parses and checks every list, loads every scene (an Error names the option; nothing is
+// written) and validates every point's MappingOptions and NoiseRegime. At most 10^7 points.
+Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec);
+
+// `--shard i/n`: only grid points with index % n == i. Empty text: 0/1 (every point).
+struct SweepShard {
+  int index = 0, count = 1;
+  std::string name() const;  // "i/n"
+  bool holds(std::size_t grid_index) const;
+};
+Result<SweepShard> parseSweepShard(const std::string& text);
+
+// `--jobs N`: a count >= 0 (0: one worker per core). Empty text: 0.
+Result<int> parseSweepJobs(const std::string& text);
+
+// One row of sweep.csv / sweep.json (kSweepColumns, in order).
+struct SweepRow {
+  std::string grid;
+  std::size_t grid_index = 0, grid_size = 0;
+  std::string shard;
+  std::string scene, noise;
+  double sigma_r = 0.0, sigma_phi = 0.0;
+  int schedule_steps = 0, sweeps = 0, working_memory = 0;
+  std::uint64_t seed = 0;
+  int poses = 0, shapelets = 0;
+  Evaluation accuracy;  // only the fields of kSweepColumns travel through the files
+  long long proposals = 0;
+  int peak_live_tables = 0, peak_live_legs = 0;
+  double wall_s = 0.0;
+  long process_peak_rss_kib = 0;
+};
+
+// The row of grid point `index` of `grid`, mapped into `stats` and evaluated as `accuracy`.
+SweepRow sweepRow(const SweepGrid& grid, std::size_t index, const SweepShard& shard,
+                  const MapStats& stats, const Evaluation& accuracy, double wall_s,
+                  long process_peak_rss_kib);
+
+// The files' text: a header line and one line per row; a JSON array, one-space indent.
+std::string sweepRowsCsv(const std::vector<SweepRow>& rows);
+std::string sweepRowsJson(const std::vector<SweepRow>& rows);
+// sweep.json text back into rows. Errors name `source`: not a JSON array, or a row whose columns
+// are not kSweepColumns with their types.
+Result<std::vector<SweepRow>> parseSweepRows(const std::string& text, const std::string& source);
+
+// Joins the sweep.json of each of `shard_dirs` into one list of rows in grid order. Errors
+// (naming the directory): a directory without a sweep.json, rows of different grid fingerprints
+// or sizes, a grid point twice or a grid point missing.
+Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& shard_dirs);
+
+// Writes out_dir/sweep.csv and out_dir/sweep.json (created if missing), each atomically.
+Status writeSweepFiles(const std::vector<SweepRow>& rows, const std::string& out_dir);
+
+}  // namespace crunch

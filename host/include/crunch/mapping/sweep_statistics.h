@@ -1,0 +1,86 @@
+// Statistics of a sweep (issue 6, "Charts"; docs/RESULTS.md "Charts"): a sweep.json's rows
+// averaged over the seeds of each grid point (noise x schedule_steps x sweeps x working_memory),
+// the Pareto front of accuracy against cost, the noise levels of one setting, and summary.csv.
+// The charts drawn from them are render/sweep_charts.h.
+//
+// Accuracy is the F1 of the fused map (Evaluation); cost is the mean wall_s per run or the mean
+// Metropolis-Hastings proposals per run. Spreads are sample standard deviations (n - 1; 0 for a
+// single seed).
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "crunch/core/result.h"
+
+namespace crunch {
+
+// The paper's sampler setting (docs/BLACKBOARD.md; SamplerOptions / MappingOptions defaults).
+inline constexpr int kPaperScheduleSteps = 16;
+inline constexpr int kPaperSweeps = 1;
+inline constexpr int kPaperWorkingMemory = 7;
+// The paper's noise levels as ARCHITECTURE.md maps them: realistic and "very noisy" sigma_r, m.
+inline constexpr double kPaperRealisticSigmaR = 0.005;
+inline constexpr double kPaperNoisySigmaR = 0.025;
+
+// The sweep.json columns the statistics read.
+extern const std::vector<std::string> kSweepChartColumns;
+
+// One grid point's rows averaged over its seeds.
+struct SettingSummary {
+  std::string scene;
+  std::string noise;     // regime name as in sweep.json ("realistic", "x2", ...)
+  double sigma_r = 0.0;  // m
+  int schedule_steps = 0, sweeps = 0, working_memory = 0;
+  int runs = 0;  // seeds averaged
+  double f1_mean = 0.0, f1_sd = 0.0;
+  double recall_mean = 0.0, recall_sd = 0.0;
+  double precision_mean = 0.0, precision_sd = 0.0;
+  double wall_s_mean = 0.0;
+  double proposals_mean = 0.0;
+  bool isPaperSetting() const {
+    return schedule_steps == kPaperScheduleSteps && sweeps == kPaperSweeps &&
+           working_memory == kPaperWorkingMemory;
+  }
+};
+
+// "16 T x 1 sweep, WM 7": the setting's name in charts and reports.
+std::string settingName(const SettingSummary& s);
+
+// Reads and checks `path` (a sweep.json) and averages its rows per (noise, schedule_steps,
+// sweeps, working_memory), in grid order (order of first appearance). Checks: the file exists and
+// parses, is a non-empty JSON array of objects, every object has the kSweepChartColumns with the
+// right types, and all rows are of one scene. Errors name the path, and the row index and column
+// where one is at fault.
+Result<std::vector<SettingSummary>> loadSweepSummary(const std::string& path);
+
+// The Pareto front of points (cost[i], accuracy[i]): the indices of the points no other point
+// beats on both, i.e. no j with cost[j] <= cost[i] and accuracy[j] >= accuracy[i], one of them
+// strictly. Identical points are all on the front. Sorted by cost, then by accuracy. Points with
+// a non-finite coordinate are never on it and never beat another. Requires equal lengths.
+std::vector<size_t> paretoFront(const std::vector<double>& cost,
+                                const std::vector<double>& accuracy);
+
+// One noise regime's settings and their Pareto fronts (F1 against wall time, against
+// proposals). All indices are into the summary list the fronts were computed from.
+struct NoiseFronts {
+  std::string noise;
+  std::vector<size_t> settings;        // in grid order
+  std::vector<size_t> wall_front;      // sorted by cost (paretoFront)
+  std::vector<size_t> proposals_front;
+};
+// Per noise regime, in order of first appearance.
+std::vector<NoiseFronts> sweepFronts(const std::vector<SettingSummary>& all);
+
+// One setting across the noise levels, by sigma_r: the paper's setting if the sweep has it at two
+// levels or more, otherwise the first setting in grid order. Empty when the sweep has fewer than
+// two distinct sigma_r (or the chosen setting fewer than two levels).
+std::vector<SettingSummary> noiseLevels(const std::vector<SettingSummary>& all);
+
+// summary.csv: one row per (noise, setting): the means and spreads, and whether the setting is
+// on the wall-time and on the proposals Pareto front of its noise regime.
+std::string sweepSummaryCsv(const std::vector<SettingSummary>& all,
+                            const std::vector<NoiseFronts>& fronts);
+
+}  // namespace crunch

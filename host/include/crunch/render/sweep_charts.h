@@ -1,0 +1,46 @@
+// The charts of `crunchhost sweep-chart` (issue 6, "Charts"; docs/RESULTS.md "Charts"), drawn
+// from a sweep's statistics (mapping/sweep_statistics.h) with the chart renderer (chart.h):
+//
+//  - pareto_<noise> and pareto_<noise>_proposals, for every noise regime with at least two
+//    sampler settings: accuracy (F1 of the fused map, mean over seeds, error bars +-1 sample
+//    standard deviation over seeds) against cost (mean wall_s per run; then mean
+//    Metropolis-Hastings proposals per run). One point per setting, colour = schedule_steps,
+//    marker = (sweeps, working_memory); the Pareto front drawn as a line through its points; the
+//    paper's setting (16 temperatures, 1 sweep per temperature, working memory 7:
+//    docs/BLACKBOARD.md "Defaults are the paper's", beta_i = exp(7.5 - 0.5 i) for i = 15 ... 0,
+//    and "the 7-slot working memory") marked as its own series.
+//  - noise, when the sweep has at least two noise levels (distinct sigma_r): recall, F1 (mean,
+//    +-1 sd over seeds) and precision (mean) against sigma_r in mm, at one sampler setting
+//    (noiseLevels), with the paper's "realistic" (5 mm, pi/32) and "very noisy" (25 mm, pi/8)
+//    levels marked as vertical lines.
+// Pure functions: nothing is written here.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "crunch/mapping/sweep_statistics.h"
+#include "crunch/render/chart.h"
+
+namespace crunch {
+
+// One noise regime's settings `set` against one cost (proposals: MH proposals, otherwise wall
+// time); `front` indexes `set` (paretoFront order).
+Chart sweepParetoChart(const std::vector<SettingSummary>& set, bool proposals,
+                       const std::string& noise, const std::vector<size_t>& front);
+
+// One setting across noise levels (noiseLevels; at least one entry).
+Chart sweepNoiseChart(const std::vector<SettingSummary>& by_sigma);
+
+// Every chart of a sweep, named as the files' stems ("pareto_realistic", "noise", ...), the
+// summary.csv text and a short text report (the Pareto fronts by wall time, the recall at each
+// noise level and where it falls below 0.5), one line per chart family.
+struct SweepChartSet {
+  std::vector<std::pair<std::string, Chart>> charts;
+  std::string summary_csv;
+  std::string report;
+};
+SweepChartSet sweepCharts(const std::vector<SettingSummary>& all);
+
+}  // namespace crunch

@@ -1,0 +1,56 @@
+#include "crunch/mapping/report_json.h"
+
+namespace crunch {
+
+nlohmann::ordered_json accuracyJson(const Evaluation& ev) {
+  return {{"true_tables", ev.true_tables},
+          {"fused_tables", ev.fused_tables},
+          {"matched", ev.matched},
+          {"precision", ev.precision},
+          {"recall", ev.recall},
+          {"f1", ev.f1},
+          {"mean_position_error_m", ev.mean_position_error},
+          {"mean_angle_error_rad", ev.mean_angle_error}};
+}
+
+nlohmann::ordered_json evaluationJson(const Evaluation& ev, const MatchTolerance& tol) {
+  nlohmann::ordered_json accuracy = accuracyJson(ev);
+  accuracy["per_pose_tables"] = ev.per_pose_tables;
+  accuracy["per_pose_match_fraction"] = ev.per_pose_match_fraction;
+  accuracy["phantoms_near_walls"] = ev.phantoms_near_walls;
+  accuracy["phantoms_elsewhere"] = ev.phantoms_elsewhere;
+  accuracy["match_tolerance"] = {{"position_m", tol.position}, {"angle_rad", tol.angle}};
+  return accuracy;
+}
+
+nlohmann::ordered_json mapCountsJson(const Map& map) {
+  return {{"poses", map.stats.poses},
+          {"skipped_poses", map.stats.skipped_poses},
+          {"inferring_poses", map.per_pose.size()},
+          {"shapelets", map.stats.shapelets},
+          {"rejected_reports", map.stats.rejected_reports},
+          {"proposals", map.stats.proposals},
+          {"peak_live_tables", map.stats.peak_live_tables},
+          {"peak_live_legs", map.stats.peak_live_legs}};
+}
+
+nlohmann::ordered_json modelJson(const ModelParams& model) {
+  return {{"sigma_r_shapelet", model.sigma_r_shapelet},
+          {"sigma_theta_shapelet", model.sigma_theta_shapelet},
+          {"sigma_r_leg", model.sigma_r_leg},
+          {"sigma_theta_leg", model.sigma_theta_leg}};
+}
+
+nlohmann::ordered_json samplerJson(const MappingOptions& options) {
+  const SamplerOptions& s = options.sampler;
+  return {{"schedule_steps", s.schedule_steps},
+          {"schedule_log_top", s.schedule_log_top},
+          {"schedule_log_step", s.schedule_log_step},
+          {"sweeps_per_temperature", s.sweeps_per_temperature},
+          {"working_memory", options.working_memory},
+          {"global_sweeps", options.global_sweeps},
+          {"global_chains", options.global_chains},
+          {"smart_proposals", s.smart_parent}};
+}
+
+}  // namespace crunch

@@ -1,0 +1,245 @@
+#include "crunch/render/sweep_charts.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+namespace crunch {
+
+namespace {
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+const ChartColour kRed{0.84, 0.15, 0.16};
+const ChartColour kBlack{0.1, 0.1, 0.1};
+const ChartColour kGrey{0.45, 0.45, 0.45};
+const std::string kPaperLabel =
+    "paper's setting: 16 temperatures, 1 sweep, WM 7 (docs/BLACKBOARD.md)";
+constexpr double kNoiseYMax = 1.35;
+
+// The series of the Pareto chart after the front and the paper's point: one point per setting
+// (colour = temperatures, marker = sweeps and working memory), then legend-only entries.
+void addSettingSeries(Chart& c, const std::vector<SettingSummary>& set, bool proposals) {
+  auto cost = [&](const SettingSummary& s) {
+    return proposals ? s.proposals_mean / 1e3 : s.wall_s_mean;
+  };
+  std::vector<int> steps;
+  std::vector<std::pair<int, int>> combos;
+  for (const SettingSummary& s : set) {
+    if (std::find(steps.begin(), steps.end(), s.schedule_steps) == steps.end()) {
+      steps.push_back(s.schedule_steps);
+    }
+    const std::pair<int, int> k{s.sweeps, s.working_memory};
+    if (std::find(combos.begin(), combos.end(), k) == combos.end()) combos.push_back(k);
+  }
+  std::sort(steps.begin(), steps.end());
+  const MarkerShape shapes[] = {MarkerShape::kCircle, MarkerShape::kSquare, MarkerShape::kDiamond,
+                                MarkerShape::kTriangle};
+  auto colourOf = [&](int ss) {
+    return chartPalette(
+        static_cast<int>(std::find(steps.begin(), steps.end(), ss) - steps.begin()));
+  };
+  auto shapeOf = [&](int sw, int wm) {
+    const auto i = std::find(combos.begin(), combos.end(), std::pair<int, int>{sw, wm}) -
+                   combos.begin();
+    return shapes[static_cast<size_t>(i) % 4];
+  };
+  for (const SettingSummary& s : set) {
+    ChartSeries p;
+    p.style = SeriesStyle::kPoints;
+    p.marker = shapeOf(s.sweeps, s.working_memory);
+    p.marker_size = 5.0;
+    p.colour = colourOf(s.schedule_steps);
+    p.x = {cost(s)};
+    p.y = {s.f1_mean};
+    p.y_error = {s.f1_sd};
+    c.series.push_back(p);
+  }
+  // Legend-only entries: colour = temperatures, marker = sweeps and working memory.
+  for (const int ss : steps) {
+    ChartSeries k;
+    k.label = std::to_string(ss) + " temperatures (colour)";
+    k.style = SeriesStyle::kPoints;
+    k.colour = colourOf(ss);
+    k.marker_size = 5.0;
+    c.series.push_back(k);
+  }
+  for (const auto& [sw, wm] : combos) {
+    ChartSeries k;
+    k.label = std::to_string(sw) + " sweep" + (sw == 1 ? "" : "s") +
+              " per temperature, working memory " + std::to_string(wm) + " (marker)";
+    k.style = SeriesStyle::kPoints;
+    k.marker = shapeOf(sw, wm);
+    k.colour = kGrey;
+    k.marker_size = 5.0;
+    c.series.push_back(k);
+  }
+}
+
+// The Pareto fronts (wall time) of every noise regime with two settings or more, and their charts.
+void addParetoCharts(const std::vector<SettingSummary>& all, const std::vector<NoiseFronts>& fronts,
+                     SweepChartSet& out, std::ostringstream& report) {
+  for (const NoiseFronts& f : fronts) {
+    if (f.settings.size() < 2) continue;
+    std::vector<SettingSummary> set;
+    for (const size_t i : f.settings) set.push_back(all[i]);
+    // The fronts index `all`; the charts index `set`.
+    auto local = [&](const std::vector<size_t>& front) {
+      std::vector<size_t> v;
+      for (const size_t i : front)
+        v.push_back(static_cast<size_t>(
+            std::find(f.settings.begin(), f.settings.end(), i) - f.settings.begin()));
+      return v;
+    };
+    const std::vector<size_t> fw = local(f.wall_front), fp = local(f.proposals_front);
+    out.charts.push_back({"pareto_" + f.noise, sweepParetoChart(set, false, f.noise, fw)});
+    out.charts.push_back(
+        {"pareto_" + f.noise + "_proposals", sweepParetoChart(set, true, f.noise, fp)});
+    report << f.noise << ": Pareto front (wall time):";
+    for (const size_t k : fw) {
+      report << " [" << settingName(set[k]) << ": F1 " << fmt("%.3f", set[k].f1_mean) << ", "
+             << fmt("%.2f", set[k].wall_s_mean) << " s]";
+    }
+    report << "\n";
+  }
+}
+
+}  // namespace
+
+Chart sweepParetoChart(const std::vector<SettingSummary>& set, bool proposals,
+                       const std::string& noise, const std::vector<size_t>& front) {
+  Chart c;
+  const double sigma_mm = set.front().sigma_r * 1e3;
+  c.options.title = "Accuracy against cost: noise '" + noise + "' (sigma_r " +
+                    fmt("%g", sigma_mm) + " mm), " + set.front().scene + " scene, mean of " +
+                    std::to_string(set.front().runs) + " seeds";
+  c.options.x_label = proposals ? "Metropolis-Hastings proposals per run (thousands, mean)"
+                                : "wall time per run (s, mean)";
+  c.options.y_label = "F1 of the fused map (bars: +-1 sd over seeds)";
+  c.options.width_px = 1000;
+  c.options.height_px = 640;
+  c.options.y_min = 0.0;
+  c.options.y_max = 1.05;
+  c.options.x_min = 0.0;
+  double best = 0.0;
+  for (const SettingSummary& s : set) best = std::max(best, s.f1_mean);
+  c.options.legend = best < 0.6 ? LegendPosition::kTopRight : LegendPosition::kBottomRight;
+  auto cost = [&](const SettingSummary& s) {
+    return proposals ? s.proposals_mean / 1e3 : s.wall_s_mean;
+  };
+  ChartSeries line;
+  line.label = "Pareto front (no other setting is both cheaper and more accurate)";
+  line.style = SeriesStyle::kLine;
+  line.colour = kBlack;
+  line.line_width = 1.5;
+  line.dashed = true;
+  for (const size_t i : front) {
+    line.x.push_back(cost(set[i]));
+    line.y.push_back(set[i].f1_mean);
+  }
+  c.series.push_back(line);
+  ChartSeries paper;
+  paper.label = kPaperLabel;
+  paper.style = SeriesStyle::kPoints;
+  paper.marker = MarkerShape::kCircle;
+  paper.marker_size = 10.0;
+  paper.colour = kRed;
+  for (const SettingSummary& s : set) {
+    if (!s.isPaperSetting()) continue;
+    paper.x.push_back(cost(s));
+    paper.y.push_back(s.f1_mean);
+  }
+  if (!paper.x.empty()) c.series.push_back(paper);
+  addSettingSeries(c, set, proposals);
+  return c;
+}
+
+Chart sweepNoiseChart(const std::vector<SettingSummary>& by_sigma) {
+  Chart c;
+  const SettingSummary& f = by_sigma.front();
+  c.options.title = "Accuracy against sensor noise: " + f.scene + " scene, " + settingName(f) +
+                    ", mean of " + std::to_string(f.runs) + " seeds";
+  c.options.x_label = "sigma_r (mm); sigma_phi grows with it (5 mm : pi/32)";
+  c.options.y_label = "recall, F1, precision (bars: +-1 sd over seeds)";
+  c.options.width_px = 1000;
+  c.options.height_px = 640;
+  c.options.y_min = 0.0;
+  c.options.y_max = kNoiseYMax;  // room above 1 for the legend
+  c.options.x_min = 0.0;
+  c.options.legend = LegendPosition::kTopRight;
+  ChartSeries recall, f1, precision;
+  recall.label = "recall (tables found / real tables)";
+  recall.colour = chartPalette(0);
+  recall.marker = MarkerShape::kCircle;
+  f1.label = "F1 of the fused map";
+  f1.colour = chartPalette(1);
+  f1.marker = MarkerShape::kSquare;
+  precision.label = "precision (mean)";
+  precision.colour = chartPalette(2);
+  precision.marker = MarkerShape::kDiamond;
+  precision.dashed = true;
+  precision.line_width = 1.5;
+  for (const SettingSummary& s : by_sigma) {
+    const double x = s.sigma_r * 1e3;
+    recall.x.push_back(x);
+    recall.y.push_back(s.recall_mean);
+    recall.y_error.push_back(s.recall_sd);
+    f1.x.push_back(x);
+    f1.y.push_back(s.f1_mean);
+    f1.y_error.push_back(s.f1_sd);
+    precision.x.push_back(x);
+    precision.y.push_back(s.precision_mean);
+  }
+  auto vline = [](const std::string& label, double x, ChartColour col) {
+    ChartSeries v;
+    v.label = label;
+    v.style = SeriesStyle::kLine;
+    v.colour = col;
+    v.dashed = true;
+    v.line_width = 1.5;
+    v.x = {x, x};
+    v.y = {0.0, kNoiseYMax};
+    return v;
+  };
+  c.series.push_back(vline("paper's \"realistic\" (5 mm, pi/32)", kPaperRealisticSigmaR * 1e3,
+                           kGrey));
+  c.series.push_back(
+      vline("paper's \"very noisy\" (25 mm, pi/8)", kPaperNoisySigmaR * 1e3, kRed));
+  c.series.push_back(recall);
+  c.series.push_back(f1);
+  c.series.push_back(precision);
+  return c;
+}
+
+SweepChartSet sweepCharts(const std::vector<SettingSummary>& all) {
+  SweepChartSet out;
+  const std::vector<NoiseFronts> fronts = sweepFronts(all);
+  std::ostringstream report;
+  addParetoCharts(all, fronts, out, report);
+  const std::vector<SettingSummary> by_sigma = noiseLevels(all);
+  if (!by_sigma.empty()) {
+    out.charts.push_back({"noise", sweepNoiseChart(by_sigma)});
+    report << "noise (" << settingName(by_sigma.front()) << "): recall";
+    for (const SettingSummary& s : by_sigma) {
+      report << " " << fmt("%g", s.sigma_r * 1e3) << " mm " << fmt("%.2f", s.recall_mean);
+    }
+    const auto fail = std::find_if(by_sigma.begin(), by_sigma.end(),
+                                   [](const SettingSummary& s) { return s.recall_mean < 0.5; });
+    if (fail != by_sigma.end()) {
+      report << "; mean recall below 0.5 from sigma_r = " << fmt("%g", fail->sigma_r * 1e3)
+             << " mm";
+    } else {
+      report << "; mean recall stays >= 0.5 at every level";
+    }
+    report << "\n";
+  }
+  out.summary_csv = sweepSummaryCsv(all, fronts);
+  out.report = report.str();
+  return out;
+}
+
+}  // namespace crunch

@@ -1,0 +1,114 @@
+#include "sim_mode.h"
+
+#include <chrono>
+#include <functional>
+#include <ostream>
+
+#include "crunch/core/atomic_file.h"
+#include "crunch/mapping/map_io.h"
+#include "crunch/render/map_render.h"
+#include "crunch_sim/sim_report.h"
+#include "crunch_sim/sim_run.h"
+#include "progress.h"
+
+namespace crunch::app {
+
+namespace {
+
+// The library's run options from the command line's; an Error names the option.
+Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
+  sim::SimRunOptions o;
+  auto kind = sim::sensorKindByName(opt.sensor_model);
+  if (!kind) return kind.error();
+  o.sensor = kind.value();
+  auto noise = noiseRegimeByName(opt.noise);
+  if (!noise) return Error{"--" + noise.error().message};
+  o.noise = noise.value();
+  o.models_path = opt.models_path.empty() ? std::string(CRUNCH_DEFAULT_MODELS) : opt.models_path;
+  o.seed = opt.seed;
+  o.mapping = opt.mapping;
+  o.snapshot_pose = opt.snapshot_pose;
+  o.snapshot_temperature = opt.snapshot_temperature;
+  return o;
+}
+
+// Each file complete or not at all; stops at the first failure.
+Status writeOutputs(const SimOptions& opt, const sim::SimScene& scene, const sim::SimRun& run,
+                    const sim::SimRunOptions& ro, double total_s) {
+  if (auto s = ensureDirectory(opt.out_dir); !s) return s;
+  const std::string dir = opt.out_dir + "/";
+  RenderOptions render;
+  render.title = "crunchhost --sim, noise " + run.noise.name + ", seed " + std::to_string(opt.seed);
+  const std::function<Status()> writes[] = {
+      [&] { return writeFileAtomic(dir + "map.json", mapToJson(run.map)); },
+      [&] { return renderMapPng(run.map, scene.scene, dir + "map.png", render); },
+      [&] {
+        return writeFileAtomic(dir + "report.json",
+                               sim::simReportJson(scene.scene, run, ro, total_s));
+      },
+      [&]() -> Status {
+        if (!run.snapshot) return okStatus();
+        const std::string base = dir + "snapshot_" + std::to_string(run.snapshot->pose_index);
+        if (Status st = renderSnapshotPng(*run.snapshot, scene.scene, base + ".png"); !st) return st;
+        return renderSnapshotSvg(*run.snapshot, scene.scene, base + ".svg");
+      }};
+  for (const auto& write : writes)
+    if (Status status = write(); !status) return status;
+  return okStatus();
+}
+
+void printSummary(const SimOptions& opt, const sim::SimScene& scene, const sim::SimRun& run,
+                  std::ostream& out) {
+  const Evaluation& ev = run.evaluation;
+  const MapStats& st = run.map.stats;
+  if (opt.json_progress) {
+    out << "{\"event\":\"done\",\"recall\":" << ev.recall << ",\"precision\":" << ev.precision
+        << ",\"out\":\"" << opt.out_dir << "\"}\n";
+    return;
+  }
+  const std::string dir = opt.out_dir + "/";
+  out << "mapped " << scene.scene.source << ": " << st.poses << " poses (" << st.skipped_poses
+      << " skipped), " << st.shapelets << " shapelets, " << run.map.tables.size()
+      << " tables in the fused map\n"
+      << "recall " << ev.recall << ", precision " << ev.precision << " ("
+      << ev.phantoms_near_walls << " phantoms near walls, " << ev.phantoms_elsewhere
+      << " elsewhere), mean error " << ev.mean_position_error << " m / "
+      << ev.mean_angle_error * 180.0 / kPi << " deg\n"
+      << "inference " << st.wall_s << " s; wrote " << dir << "{map.json,map.png,report.json}\n";
+  if (run.snapshot) out << "wrote " << dir << "snapshot_" << run.snapshot->pose_index << ".{png,svg}\n";
+}
+
+}  // namespace
+
+int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto loaded = sim::loadSimScene(opt.scene_path);
+  if (!loaded) {
+    err << "crunchhost: " << loaded.error().message << "\n";
+    return 2;
+  }
+  auto ro = runOptions(opt);
+  if (!ro) {
+    err << "crunchhost: " << ro.error().message << "\n";
+    return 2;
+  }
+  PoseProgress bar(opt.json_progress ? out : err, opt.json_progress);
+  ro.value().mapping.progress = [&bar](int done, int total) { bar(done, total); };
+  const sim::SimScene scene = sim::SimScene::build(std::move(loaded).value());
+  auto run = sim::runSimulation(scene, ro.value());
+  if (!run) {
+    err << "crunchhost: " << run.error().message << "\n";
+    return 2;
+  }
+  if (!run.value().warning.empty()) err << "crunchhost: " << run.value().warning << "\n";
+  const double total_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (Status s = writeOutputs(opt, scene, run.value(), ro.value(), total_s); !s) {
+    err << "crunchhost: " << s.error().message << "\n";
+    return 1;
+  }
+  printSummary(opt, scene, run.value(), out);
+  return 0;
+}
+
+}  // namespace crunch::app

@@ -1,0 +1,91 @@
+#include "crunch_sim/sweep_run.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "crunch_sim/sim_run.h"
+
+namespace crunch::sim {
+
+namespace {
+
+long peakRssKib() {
+  rusage u{};
+  if (getrusage(RUSAGE_SELF, &u) != 0) return -1;
+  return u.ru_maxrss;  // Linux: KiB
+}
+
+// Every World query of the process: this ODE build keeps its collision scratch global
+// (world.h), and each World reuses its own scratch geoms.
+std::mutex g_world_mutex;
+
+SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_t index,
+                  const SweepShard& shard) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const SweepPoint p = g.pointAt(index);
+  SimRunOptions o;
+  o.sensor = SensorKind::kGaussian;
+  o.noise = g.noises[p.noise];
+  o.seed = p.seed;
+  o.mapping = g.mappingOptions(p);
+  o.world_mutex = &g_world_mutex;
+  auto run = runSimulation(scenes[p.scene], o);
+  if (!run) throw std::runtime_error(run.error().message);  // the grid validated every point
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sweepRow(g, index, shard, run.value().map.stats, run.value().evaluation, wall,
+                  peakRssKib());
+}
+
+}  // namespace
+
+Result<SweepRunResult> runSweepPoints(const SweepGrid& g, const SweepShard& shard, int jobs,
+                                      const std::function<void(size_t, size_t)>& progress) {
+  std::vector<SimScene> scenes;
+  for (const SweepScene& s : g.scenes) scenes.push_back(SimScene::build(s.scene));
+  std::vector<size_t> indices;
+  for (size_t i = 0; i < g.size(); ++i)
+    if (shard.holds(i)) indices.push_back(i);
+  if (jobs == 0) jobs = static_cast<int>(std::thread::hardware_concurrency());
+  jobs = std::max(1, std::min<int>(jobs, static_cast<int>(std::max<size_t>(1, indices.size()))));
+
+  SweepRunResult result;
+  result.jobs = jobs;
+  result.rows.resize(indices.size());
+  std::atomic<size_t> next{0};
+  std::mutex done_mutex;
+  size_t done = 0;
+  std::string failure;
+  auto worker = [&] {
+    for (;;) {
+      const size_t k = next.fetch_add(1);
+      if (k >= indices.size()) return;
+      SweepRow row;
+      std::string what;
+      try {
+        row = runPoint(g, scenes, indices[k], shard);
+      } catch (const std::exception& e) {
+        what = e.what();
+      }
+      std::lock_guard<std::mutex> lock(done_mutex);
+      if (!what.empty() && failure.empty())
+        failure = "grid point " + std::to_string(indices[k]) + ": " + what;
+      result.rows[k] = std::move(row);
+      if (progress) progress(++done, indices.size());
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < jobs; ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+  if (!failure.empty()) return Error{failure};
+  return result;
+}
+
+}  // namespace crunch::sim
