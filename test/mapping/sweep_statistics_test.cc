@@ -1,0 +1,131 @@
+// A sweep's statistics (mapping/sweep_statistics.h): the Pareto front on hand-made points, the
+// averaging over seeds of a small synthetic sweep.json, the fronts per noise regime, the noise
+// levels of one setting and summary.csv.
+#include "crunch/mapping/sweep_statistics.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "support/temp_dir.h"
+
+using namespace crunch;
+using Json = nlohmann::ordered_json;
+
+namespace {
+
+Json row(const std::string& noise, double sigma_r, int ss, int sw, int wm, int seed, double f1,
+         double wall, double proposals) {
+  return Json{{"scene", "default"},      {"noise", noise},   {"sigma_r", sigma_r},
+              {"schedule_steps", ss},    {"sweeps", sw},     {"working_memory", wm},
+              {"seed", seed},            {"precision", 0.7}, {"recall", f1},
+              {"f1", f1},                {"proposals", proposals}, {"wall_s", wall}};
+}
+
+// 2 noise regimes x 4 settings x 2 seeds; (8, 2, 14) costs more than (16, 1, 7) and is worse.
+Json synthetic() {
+  Json rows = Json::array();
+  struct S {
+    int ss, sw, wm;
+    double f1, wall, props;
+  };
+  const S settings[] = {{4, 1, 7, 0.5, 0.2, 50e3},
+                        {8, 1, 7, 0.7, 0.4, 100e3},
+                        {8, 2, 14, 0.6, 1.2, 300e3},
+                        {16, 1, 7, 0.8, 0.9, 250e3}};
+  for (const auto& [noise, sigma, scale] :
+       {std::tuple{"realistic", 0.005, 1.0}, std::tuple{"noisy", 0.025, 0.25}}) {
+    for (const S& s : settings) {
+      for (int seed = 1; seed <= 2; ++seed) {
+        const double d = seed == 1 ? -0.1 : 0.1;  // spread: sd = 0.1 * sqrt(2)
+        rows.push_back(row(noise, sigma, s.ss, s.sw, s.wm, seed, s.f1 * scale + d, s.wall,
+                           s.props));
+      }
+    }
+  }
+  return rows;
+}
+
+std::vector<SettingSummary> load(const Json& rows) {
+  TempDir dir;
+  std::ofstream(dir.file("sweep.json")) << rows.dump();
+  auto s = loadSweepSummary(dir.file("sweep.json"));
+  REQUIRE(s);
+  return s.value();
+}
+
+}  // namespace
+
+TEST_CASE("paretoFront: the settings no other beats on both cost and accuracy", "[sweep_statistics]") {
+  //            0    1    2    3    4    5    6
+  const std::vector<double> cost = {1.0, 2.0, 3.0, 2.5, 4.0, 0.5, 2.0};
+  const std::vector<double> acc = {0.5, 0.7, 0.9, 0.6, 0.9, 0.2, 0.7};
+  // 3 is beaten by 1 (cheaper, better); 4 by 2 (same accuracy, cheaper); 1 and 6 are identical:
+  // neither beats the other. Sorted by cost.
+  CHECK(paretoFront(cost, acc) == std::vector<size_t>{5, 0, 1, 6, 2});
+  CHECK(paretoFront({}, {}).empty());
+  CHECK(paretoFront({1.0}, {0.0}) == std::vector<size_t>{0});
+  // Equal cost: only the more accurate one. Equal accuracy: only the cheaper one.
+  CHECK(paretoFront({1.0, 1.0}, {0.3, 0.4}) == std::vector<size_t>{1});
+  CHECK(paretoFront({2.0, 1.0}, {0.4, 0.4}) == std::vector<size_t>{1});
+  // A NaN point is never on the front and beats nothing.
+  const double nan = std::nan("");
+  CHECK(paretoFront({nan, 2.0, 1.0}, {1.0, 0.5, 0.1}) == std::vector<size_t>{2, 1});
+}
+
+TEST_CASE("loadSweepSummary averages each setting over its seeds, in grid order",
+          "[sweep_statistics]") {
+  const std::vector<SettingSummary> s = load(synthetic());
+  REQUIRE(s.size() == 8);
+  const SettingSummary& first = s[0];
+  CHECK(first.noise == "realistic");
+  CHECK(first.schedule_steps == 4);
+  CHECK(first.runs == 2);
+  CHECK(first.f1_mean == Approx(0.5));
+  CHECK(first.f1_sd == Approx(0.1 * std::sqrt(2.0)));
+  CHECK(first.wall_s_mean == Approx(0.2));
+  CHECK(s[3].isPaperSetting());
+  CHECK(s[4].noise == "noisy");
+  CHECK(s[4].f1_mean == Approx(0.125));
+  CHECK(settingName(s[2]) == "8 T x 2 sweeps, WM 14");
+}
+
+TEST_CASE("loadSweepSummary names the file, row and column at fault", "[sweep_statistics]") {
+  TempDir dir;
+  const std::string path = dir.file("sweep.json");
+  CHECK_THAT(loadSweepSummary(path).error().message, Catch::Contains(path));
+  Json rows = synthetic();
+  rows[3]["f1"] = "high";
+  std::ofstream(path) << rows.dump();
+  CHECK_THAT(loadSweepSummary(path).error().message,
+             Catch::Contains("row 3") && Catch::Contains("'f1'"));
+}
+
+TEST_CASE("sweepFronts: per noise regime, the wall-time and proposals fronts", "[sweep_statistics]") {
+  const std::vector<SettingSummary> all = load(synthetic());
+  const std::vector<NoiseFronts> fronts = sweepFronts(all);
+  REQUIRE(fronts.size() == 2);
+  CHECK(fronts[0].noise == "realistic");
+  CHECK(fronts[0].settings == std::vector<size_t>{0, 1, 2, 3});
+  CHECK(fronts[0].wall_front == std::vector<size_t>{0, 1, 3});  // (8, 2, 14) is off
+  CHECK(fronts[1].settings == std::vector<size_t>{4, 5, 6, 7});
+  CHECK(fronts[1].proposals_front == std::vector<size_t>{4, 5, 7});
+  const std::string csv = sweepSummaryCsv(all, fronts);
+  CHECK(csv.find("default,realistic,5,8,2,14,2,0.6000,0.1414") != std::string::npos);
+  CHECK(csv.find(",0,0\n") != std::string::npos);  // (8, 2, 14): on no front
+}
+
+TEST_CASE("noiseLevels: the paper's setting across sigma_r, or none with one level",
+          "[sweep_statistics]") {
+  const std::vector<SettingSummary> levels = noiseLevels(load(synthetic()));
+  REQUIRE(levels.size() == 2);
+  CHECK(levels[0].isPaperSetting());
+  CHECK(levels[0].sigma_r < levels[1].sigma_r);
+  Json one = Json::array();
+  one.push_back(row("realistic", 0.005, 16, 1, 7, 1, 0.8, 1.0, 10.0));
+  CHECK(noiseLevels(load(one)).empty());
+}

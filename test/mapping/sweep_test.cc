@@ -1,0 +1,185 @@
+// The sweep grid (mapping/sweep.h): grid order, validation naming the option, the fingerprint,
+// rows through CSV and JSON and back, shards and jobs, and the merge of shards. No simulator.
+#include "crunch/mapping/sweep.h"
+
+#include <catch2/catch.hpp>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "support/temp_dir.h"
+
+using namespace crunch;
+
+namespace {
+
+SweepGridSpec smallSpec() {
+  SweepGridSpec s;
+  s.noise = "ideal,noisy";
+  s.schedule_steps = "4,8";
+  s.seeds = "3";
+  return s;
+}
+
+SweepRow rowAt(const SweepGrid& g, size_t index, const SweepShard& shard) {
+  MapStats stats;
+  stats.poses = 10;
+  stats.shapelets = 7;
+  stats.proposals = 123456789012LL;
+  Evaluation ev;
+  ev.true_tables = 2;
+  ev.fused_tables = 3;
+  ev.matched = 2;
+  ev.precision = 2.0 / 3.0;
+  ev.recall = 1.0;
+  ev.f1 = 0.8;
+  ev.mean_position_error = 0.1 * static_cast<double>(index);
+  return sweepRow(g, index, shard, stats, ev, 0.25, 4096);
+}
+
+void writeText(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+
+}  // namespace
+
+TEST_CASE("Sweep grid: points in grid order, seed fastest and scene slowest", "[sweep]") {
+  const auto g = buildSweepGrid(smallSpec());
+  REQUIRE(g);
+  CHECK(g.value().size() == 2 * 2 * 3);
+  CHECK(g.value().scenes.size() == 1);
+  CHECK(g.value().scenes[0].arg == "default");
+  const SweepPoint p0 = g.value().pointAt(0);
+  CHECK((p0.noise == 0 && p0.schedule_steps == 4 && p0.seed == 1));
+  const SweepPoint p4 = g.value().pointAt(4);  // seed 2 of (ideal, 8)
+  CHECK((p4.noise == 0 && p4.schedule_steps == 8 && p4.seed == 2));
+  const SweepPoint last = g.value().pointAt(11);
+  CHECK((last.noise == 1 && last.schedule_steps == 8 && last.seed == 3));
+  const MappingOptions mo = g.value().mappingOptions(last);
+  CHECK(mo.seed == 3);
+  CHECK(mo.sampler.schedule_steps == 8);
+  CHECK(mo.working_memory == MappingOptions{}.working_memory);
+  CHECK(mo.validate().ok());
+}
+
+TEST_CASE("Sweep grid: noise scales are multiples of realistic, named xS", "[sweep]") {
+  SweepGridSpec s;
+  s.noise_scale = "0.5,2";
+  const auto g = buildSweepGrid(s);
+  REQUIRE(g);
+  REQUIRE(g.value().noises.size() == 2);
+  CHECK(g.value().noises[0].name == "x0.5");
+  CHECK(g.value().noises[1].sigma_r == Approx(2 * NoiseRegime::realistic().sigma_r));
+  SweepGridSpec none;
+  REQUIRE(buildSweepGrid(none));
+  CHECK(buildSweepGrid(none).value().noises.front().name == "realistic");
+}
+
+TEST_CASE("Sweep grid: every bad list is an Error naming its option", "[sweep]") {
+  struct Case {
+    std::string SweepGridSpec::*field;
+    std::string value, option;
+  };
+  const Case cases[] = {{&SweepGridSpec::noise, "realistic,loud", "--noise"},
+                        {&SweepGridSpec::noise, "ideal,ideal", "--noise"},
+                        {&SweepGridSpec::noise_scale, "1,x", "--noise-scale"},
+                        {&SweepGridSpec::noise_scale, "-1", "--noise-scale"},
+                        {&SweepGridSpec::schedule_steps, "4,,8", "--schedule-steps"},
+                        {&SweepGridSpec::schedule_steps, "0", "--schedule-steps"},
+                        {&SweepGridSpec::sweeps, "1,1", "--sweeps"},
+                        {&SweepGridSpec::working_memory, "7,", "--working-memory"},
+                        {&SweepGridSpec::working_memory, "5000", "--working-memory"},
+                        {&SweepGridSpec::seeds, "two", "--seeds"},
+                        {&SweepGridSpec::seeds, "1,2", "--seeds"},
+                        {&SweepGridSpec::seed_list, "3,3", "--seed-list"}};
+  for (const Case& c : cases) {
+    SweepGridSpec s;
+    s.*c.field = c.value;
+    const auto g = buildSweepGrid(s);
+    INFO(c.option << " " << c.value);
+    REQUIRE_FALSE(g);
+    CHECK_THAT(g.error().message, Catch::Contains(c.option));
+  }
+  SweepGridSpec both;
+  both.seeds = "2";
+  both.seed_list = "1";
+  CHECK_THAT(buildSweepGrid(both).error().message, Catch::Contains("--seeds and --seed-list"));
+  SweepGridSpec missing;
+  missing.scenes = {"/nonexistent/scene.json"};
+  CHECK_THAT(buildSweepGrid(missing).error().message,
+             Catch::Contains("--scene") && Catch::Contains("/nonexistent/scene.json"));
+}
+
+TEST_CASE("Sweep grid: the fingerprint follows the grid, not the spelling", "[sweep]") {
+  const std::string a = buildSweepGrid(smallSpec()).value().fingerprint;
+  CHECK(a.size() == 16);
+  SweepGridSpec spaced = smallSpec();
+  spaced.schedule_steps = " 4, 8 ";
+  CHECK(buildSweepGrid(spaced).value().fingerprint == a);
+  SweepGridSpec other = smallSpec();
+  other.seeds = "4";
+  CHECK(buildSweepGrid(other).value().fingerprint != a);
+}
+
+TEST_CASE("Sweep shards and jobs parse or name their option", "[sweep]") {
+  CHECK(parseSweepShard("").value().name() == "0/1");
+  const auto s = parseSweepShard("1/3");
+  REQUIRE(s);
+  CHECK(s.value().holds(4));
+  CHECK_FALSE(s.value().holds(3));
+  for (const char* bad : {"3/3", "1", "a/b", "-1/2", "1/0"})
+    CHECK_THAT(parseSweepShard(bad).error().message, Catch::Contains("--shard"));
+  CHECK(parseSweepJobs("").value() == 0);
+  CHECK(parseSweepJobs("3").value() == 3);
+  for (const char* bad : {"-1", "1,2", "x"})
+    CHECK_THAT(parseSweepJobs(bad).error().message, Catch::Contains("--jobs"));
+}
+
+TEST_CASE("Sweep rows: CSV has the JSON's values, and JSON reads back exactly", "[sweep]") {
+  const SweepGrid g = buildSweepGrid(smallSpec()).value();
+  std::vector<SweepRow> rows = {rowAt(g, 0, {}), rowAt(g, 7, {})};
+  rows[1].accuracy.mean_angle_error = std::numeric_limits<double>::quiet_NaN();  // written null
+  const std::string json = sweepRowsJson(rows);
+  const auto back = parseSweepRows(json, "sweep.json");
+  REQUIRE(back);
+  CHECK(sweepRowsJson(back.value()) == json);
+  CHECK(sweepRowsCsv(back.value()) == sweepRowsCsv(rows));
+  const std::string csv = sweepRowsCsv(rows);
+  CHECK(csv.substr(0, csv.find('\n')) ==
+        "grid,grid_index,grid_size,shard,scene,noise,sigma_r,sigma_phi,schedule_steps,sweeps,"
+        "working_memory,seed,poses,shapelets,fused_tables,true_tables,matched,precision,recall,"
+        "f1,mean_position_error_m,mean_angle_error_rad,per_pose_match_fraction,"
+        "phantoms_near_walls,phantoms_elsewhere,proposals,peak_live_tables,peak_live_legs,"
+        "wall_s,process_peak_rss_kib");
+  CHECK(back.value()[1].proposals == 123456789012LL);
+  CHECK(back.value()[1].noise == "noisy");  // 7 = (noisy, 4 temperatures, seed 2)
+  CHECK_FALSE(parseSweepRows("{}", "x.json"));
+  CHECK_THAT(parseSweepRows("[{\"grid\": 1}]", "x.json").error().message,
+             Catch::Contains("x.json") && Catch::Contains("not a sweep row"));
+}
+
+TEST_CASE("Sweep merge: shards join in grid order, other grids, twins and gaps refused",
+          "[sweep]") {
+  const SweepGrid g = buildSweepGrid(smallSpec()).value();
+  const SweepShard s0 = parseSweepShard("0/2").value(), s1 = parseSweepShard("1/2").value();
+  std::vector<SweepRow> even, odd;
+  for (size_t i = 0; i < g.size(); ++i) (i % 2 ? odd : even).push_back(rowAt(g, i, i % 2 ? s1 : s0));
+  TempDir a, b, c;
+  writeText(a.file("sweep.json"), sweepRowsJson(odd));
+  writeText(b.file("sweep.json"), sweepRowsJson(even));
+  const auto merged = mergeSweepShards({a.path().string(), b.path().string()});
+  REQUIRE(merged);
+  REQUIRE(merged.value().size() == g.size());
+  for (size_t i = 0; i < g.size(); ++i) CHECK(merged.value()[i].grid_index == i);
+  CHECK_THAT(mergeSweepShards({a.path().string()}).error().message,
+             Catch::Contains("missing") && Catch::Contains("0, 2, 4"));
+  CHECK_THAT(mergeSweepShards({a.path().string(), a.path().string()}).error().message,
+             Catch::Contains("appears twice"));
+  std::vector<SweepRow> other = even;
+  for (SweepRow& r : other) r.grid = "0000000000000000";
+  writeText(c.file("sweep.json"), sweepRowsJson(other));
+  CHECK_THAT(mergeSweepShards({a.path().string(), c.path().string()}).error().message,
+             Catch::Contains("another grid"));
+  CHECK_THAT(mergeSweepShards({c.file("nothing")}).error().message,
+             Catch::Contains("not a sweep output directory"));
+  CHECK_FALSE(mergeSweepShards({}));
+}
