@@ -1,4 +1,4 @@
-// crunchhost --sim --snapshot K (sim_mode.h, map_render.h renderSnapshotPng): the blackboard
+// crunchhost --sim --snapshot K (sim/app/sim_mode.h, render/blackboard_snapshot.h, map_render.h): the blackboard
 // picture of paper Figs. 3-4 after pose K's annealing, on the small two_tables scene.
 #include <cairo.h>
 
