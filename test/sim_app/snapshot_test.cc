@@ -1,5 +1,5 @@
-// crunchhost --sim --snapshot K (sim/app/sim_mode.h, render/blackboard_snapshot.h, map_render.h): the blackboard
-// picture of paper Figs. 3-4 after pose K's annealing, on the small two_tables scene.
+// crunchhost --sim --snapshot K (sim/app/sim_mode.h, render/blackboard_snapshot.h,
+// map_render.h): the blackboard picture of paper Figs. 3-4 after pose K's annealing, on the small two_tables scene.
 #include <cairo.h>
 
 #include <catch2/catch.hpp>
