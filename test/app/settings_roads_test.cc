@@ -67,11 +67,10 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
 
 TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing written",
           "[settings]") {
-  // (The message may name the option as typed, --working-memory, or as the library's field,
-  // working_memory: both name it.)
-  const Case c = GENERATE(Case{"--working-memory 7,0", "working"},
-                          Case{"--schedule-steps 4,5000", "schedule"},
-                          Case{"--sweeps 0", "sweeps"},
+  const Case c = GENERATE(Case{"--working-memory 7,0", "working_memory"},
+                          Case{"--working-memory -5", "working_memory"},
+                          Case{"--schedule-steps 4,5000", "schedule_steps"},
+                          Case{"--sweeps 0", "sweeps_per_temperature"},
                           Case{"--noise realistic,bogus", "bogus"},
                           Case{"--noise-scale 1,1e9", "sigma_r"});
   expectRefused("sweep", c);

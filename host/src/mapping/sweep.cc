@@ -99,14 +99,15 @@ Result<std::vector<double>> parseScales(const std::string& text, const std::stri
   return values;
 }
 
-// An integer list with a default when the text is empty.
+// An integer list with a default when the text is empty. Its range is MappingOptions::validate's
+// (buildGrid checks every point), not this parser's: one place for each setting's range.
 Status parseBudgets(const std::string& text, const std::string& option, int fallback,
                     std::vector<int>& out) {
   if (text.empty()) {
     out = {fallback};
     return okStatus();
   }
-  auto v = parseIntegers<int>(text, option, 1);
+  auto v = parseIntegers<int>(text, option, std::numeric_limits<int>::min());
   if (!v) return v.error();
   out = v.value();
   return okStatus();
@@ -379,17 +380,28 @@ Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec) {
   if (auto s = parseBudgets(spec.working_memory, "--working-memory",
                             mapping_defaults.working_memory, g.working_memory); !s)
     return s.error();
-  // Every grid point's settings through the library's own validation (one road in).
-  for (const int steps : g.schedule_steps)
-    for (const int sw : g.sweeps)
-      for (const int wm : g.working_memory) {
-        MappingOptions mo;
-        mo.sampler.schedule_steps = steps;
-        mo.sampler.sweeps_per_temperature = sw;
-        mo.working_memory = wm;
-        if (auto s = mo.validate(); !s)
-          return Error{"--schedule-steps/--sweeps/--working-memory: " + s.error().message};
-      }
+  // Every grid value through the library's own validation (one road in), named by its option
+  // (each axis varies one field of MappingOptions, so checking each value checks every point).
+  auto check = [](const std::string& option, const auto& values, auto set) -> Status {
+    for (const int v : values) {
+      MappingOptions mo;
+      set(mo, v);
+      if (auto s = mo.validate(); !s) return Error{option + ": " + s.error().message};
+    }
+    return okStatus();
+  };
+  if (auto s = check("--schedule-steps", g.schedule_steps,
+                     [](MappingOptions& mo, int v) { mo.sampler.schedule_steps = v; });
+      !s)
+    return s.error();
+  if (auto s = check("--sweeps", g.sweeps,
+                     [](MappingOptions& mo, int v) { mo.sampler.sweeps_per_temperature = v; });
+      !s)
+    return s.error();
+  if (auto s = check("--working-memory", g.working_memory,
+                     [](MappingOptions& mo, int v) { mo.working_memory = v; });
+      !s)
+    return s.error();
   if (auto s = parseSeeds(spec, g); !s) return s.error();
   constexpr size_t kMaxGrid = 10'000'000;
   if (g.size() > kMaxGrid) return Error{"sweep: the grid has more than 10^7 points"};
