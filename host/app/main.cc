@@ -142,20 +142,20 @@ CLI::App* addSweep(CLI::App& app, SweepOptions& o) {
       "sweep", "map a grid of scenes x noise x sampler budgets x seeds with the gaussian (fast, "
                "ray-cast) sensor model, one row per run in OUT/sweep.csv and OUT/sweep.json "
                "(docs/RESULTS.md)");
-  sweep->add_option("--scene", o.scenes,
+  sweep->add_option("--scene", o.grid.scenes,
                     "scene file, repeatable; the word 'default' is the built-in arena "
                     "(default: default)");
-  sweep->add_option("--noise", o.noise, "noise regimes, e.g. ideal,realistic,noisy");
-  sweep->add_option("--noise-scale", o.noise_scale,
+  sweep->add_option("--noise", o.grid.noise, "noise regimes, e.g. ideal,realistic,noisy");
+  sweep->add_option("--noise-scale", o.grid.noise_scale,
                     "noise as multiples of realistic (sigma_r 5 mm, sigma_phi pi/32), e.g. "
                     "0.5,1,2,5,10 (neither: realistic)");
-  sweep->add_option("--schedule-steps", o.schedule_steps,
+  sweep->add_option("--schedule-steps", o.grid.schedule_steps,
                     "annealing temperatures, e.g. 4,8,16 (default 16)");
-  sweep->add_option("--sweeps", o.sweeps, "sweeps per temperature, e.g. 1,2,4 (default 1)");
-  sweep->add_option("--working-memory", o.working_memory,
+  sweep->add_option("--sweeps", o.grid.sweeps, "sweeps per temperature, e.g. 1,2,4 (default 1)");
+  sweep->add_option("--working-memory", o.grid.working_memory,
                     "shapelets in working memory, e.g. 7,14 (default 7)");
-  sweep->add_option("--seeds", o.seeds, "N: seeds 1..N (default 1)");
-  sweep->add_option("--seed-list", o.seed_list, "explicit seeds, e.g. 3,7,11");
+  sweep->add_option("--seeds", o.grid.seeds, "N: seeds 1..N (default 1)");
+  sweep->add_option("--seed-list", o.grid.seed_list, "explicit seeds, e.g. 3,7,11");
   sweep->add_option("--jobs", o.jobs, "worker threads (default: one per core)");
   sweep->add_option("--shard", o.shard,
                     "i/n: run only grid points with index % n == i (e.g. a Slurm array task)");

@@ -12,19 +12,6 @@ namespace crunch::app {
 
 namespace {
 
-SweepGridSpec gridSpec(const SweepOptions& o) {
-  SweepGridSpec spec;
-  spec.scenes = o.scenes;
-  spec.noise = o.noise;
-  spec.noise_scale = o.noise_scale;
-  spec.schedule_steps = o.schedule_steps;
-  spec.sweeps = o.sweeps;
-  spec.working_memory = o.working_memory;
-  spec.seeds = o.seeds;
-  spec.seed_list = o.seed_list;
-  return spec;
-}
-
 void printDone(const SweepOptions& opt, const SweepGrid& g, const SweepShard& shard,
                const sim::SweepRunResult& r, double total_s, std::ostream& out) {
   if (opt.json_progress) {
@@ -48,7 +35,7 @@ void printDone(const SweepOptions& opt, const SweepGrid& g, const SweepShard& sh
 
 int runSweep(const SweepOptions& opt, std::ostream& out, std::ostream& err) {
   const auto t0 = std::chrono::steady_clock::now();
-  auto grid = buildSweepGrid(gridSpec(opt));
+  auto grid = buildSweepGrid(opt.grid);
   if (!grid) {
     err << "crunchhost sweep: " << grid.error().message << "\n";
     return 2;

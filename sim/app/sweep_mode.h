@@ -17,19 +17,12 @@
 #include <string>
 #include <vector>
 
+#include "crunch/mapping/sweep.h"
+
 namespace crunch::app {
 
 struct SweepOptions {
-  // Scene files; the word "default" is the built-in arena. Empty: {"default"}.
-  std::vector<std::string> scenes;
-  // The lists exactly as on the command line, comma-separated; empty text = the default.
-  std::string noise;           // ideal,realistic,noisy names (default: realistic, if no scale)
-  std::string noise_scale;     // multiples of realistic's sigma_r = 5 mm and sigma_phi = pi/32
-  std::string schedule_steps;  // SamplerOptions::schedule_steps values (default 16)
-  std::string sweeps;          // SamplerOptions::sweeps_per_temperature values (default 1)
-  std::string working_memory;  // MappingOptions::working_memory values (default 7)
-  std::string seeds;           // N >= 1: seeds 1..N
-  std::string seed_list;       // explicit seeds (excludes seeds); neither: seed 1
+  SweepGridSpec grid;          // the grid's lists as on the command line (mapping/sweep.h)
   std::string jobs;            // worker threads >= 1; empty or 0: hardware_concurrency()
   std::string shard;           // "i/n": only grid points with index % n == i; empty: all
   std::string out_dir = "out";

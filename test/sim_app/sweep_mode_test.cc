@@ -33,10 +33,10 @@ std::string slurp(const std::string& p) {
 
 app::SweepOptions tinyGrid(const std::string& out_dir) {
   app::SweepOptions o;
-  o.scenes = {kScene};
-  o.noise = "realistic";
-  o.schedule_steps = "4,8";
-  o.seeds = "2";
+  o.grid.scenes = {kScene};
+  o.grid.noise = "realistic";
+  o.grid.schedule_steps = "4,8";
+  o.grid.seeds = "2";
   o.jobs = "1";
   o.out_dir = out_dir;
   return o;
@@ -130,10 +130,10 @@ TEST_CASE("sweep: a row measures what crunchhost --sim reports for the same poin
   // The default arena (six tables, where the map is not empty) at a short schedule.
   TempDir sw, sim;
   app::SweepOptions o;
-  o.scenes = {"default"};
-  o.noise = "noisy";
-  o.schedule_steps = "4";
-  o.seed_list = "2";
+  o.grid.scenes = {"default"};
+  o.grid.noise = "noisy";
+  o.grid.schedule_steps = "4";
+  o.grid.seed_list = "2";
   o.out_dir = sw.path().string();
   REQUIRE(sweep(o).code == 0);
   const Json row = rows(sw.path().string()).at(0);
@@ -232,8 +232,8 @@ TEST_CASE("sweep-merge: refuses other grids, duplicates and missing points, writ
   o0.shard = "0/2";
   app::SweepOptions o1 = tinyGrid(other.path().string());
   o1.shard = "1/2";
-  o1.seeds = "";
-  o1.seed_list = "1,3";  // another grid of the same size
+  o1.grid.seeds = "";
+  o1.grid.seed_list = "1,3";  // another grid of the same size
   REQUIRE(sweep(o0).code == 0);
   REQUIRE(sweep(o1).code == 0);
   CHECK(rows(s0.path().string())[0]["grid"] != rows(other.path().string())[0]["grid"]);
@@ -257,7 +257,7 @@ TEST_CASE("sweep-merge: refuses other grids, duplicates and missing points, writ
 TEST_CASE("sweep: bad options exit 2 naming the option and write nothing", "[app][sweep]") {
   TempDir d;
   const std::string out_dir = d.file("out");
-  using Field = std::string app::SweepOptions::*;
+  using Field = std::string* (*)(app::SweepOptions&);
   struct Case {
     std::string option;  // what the message must name
     Field field;
@@ -265,18 +265,18 @@ TEST_CASE("sweep: bad options exit 2 naming the option and write nothing", "[app
   };
   const std::string bad_key = std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/bad_unknown_key.json";
   const std::vector<Case> cases = {
-      {"--noise", &app::SweepOptions::noise, "realistic,loud"},
-      {"--noise-scale", &app::SweepOptions::noise_scale, "1,x"},
-      {"--noise-scale", &app::SweepOptions::noise_scale, "-1"},
-      {"--schedule-steps", &app::SweepOptions::schedule_steps, "4,,8"},
-      {"--schedule-steps", &app::SweepOptions::schedule_steps, "0"},
-      {"--sweeps", &app::SweepOptions::sweeps, "1,1"},
-      {"--working-memory", &app::SweepOptions::working_memory, "7,"},
-      {"--seeds", &app::SweepOptions::seeds, "two"},
-      {"--seeds and --seed-list", &app::SweepOptions::seed_list, "1"},
-      {"--jobs", &app::SweepOptions::jobs, "-1"},
-      {"--shard", &app::SweepOptions::shard, "2/2"},
-      {"--shard", &app::SweepOptions::shard, "1"},
+      {"--noise", +[](app::SweepOptions& o) { return &o.grid.noise; }, "realistic,loud"},
+      {"--noise-scale", +[](app::SweepOptions& o) { return &o.grid.noise_scale; }, "1,x"},
+      {"--noise-scale", +[](app::SweepOptions& o) { return &o.grid.noise_scale; }, "-1"},
+      {"--schedule-steps", +[](app::SweepOptions& o) { return &o.grid.schedule_steps; }, "4,,8"},
+      {"--schedule-steps", +[](app::SweepOptions& o) { return &o.grid.schedule_steps; }, "0"},
+      {"--sweeps", +[](app::SweepOptions& o) { return &o.grid.sweeps; }, "1,1"},
+      {"--working-memory", +[](app::SweepOptions& o) { return &o.grid.working_memory; }, "7,"},
+      {"--seeds", +[](app::SweepOptions& o) { return &o.grid.seeds; }, "two"},
+      {"--seeds and --seed-list", +[](app::SweepOptions& o) { return &o.grid.seed_list; }, "1"},
+      {"--jobs", +[](app::SweepOptions& o) { return &o.jobs; }, "-1"},
+      {"--shard", +[](app::SweepOptions& o) { return &o.shard; }, "2/2"},
+      {"--shard", +[](app::SweepOptions& o) { return &o.shard; }, "1"},
       {"--scene", nullptr, "/nonexistent/scene.json"},
       {"--scene", nullptr, bad_key},
       {"--seed-list", nullptr, "1,-2"},
@@ -284,12 +284,12 @@ TEST_CASE("sweep: bad options exit 2 naming the option and write nothing", "[app
   for (const Case& c : cases) {
     app::SweepOptions o = tinyGrid(out_dir);
     if (c.field) {
-      o.*c.field = c.value;
+      *c.field(o) = c.value;
     } else if (c.option == "--scene") {
-      o.scenes = {c.value};
+      o.grid.scenes = {c.value};
     } else {
-      o.seeds.clear();
-      o.seed_list = c.value;
+      o.grid.seeds.clear();
+      o.grid.seed_list = c.value;
     }
     const Run r = sweep(o);
     INFO(c.option << ": " << r.err);
