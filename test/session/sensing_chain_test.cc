@@ -202,10 +202,11 @@ TEST_CASE("SensingChain: the simulator's whisk at a leg is reported within a whi
     REQUIRE(!reports.empty());
     CHECK(c.counts().reports == static_cast<int>(reports.size()));
     CHECK(!rays.empty());
+    const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
     for (const ContactReport& r : reports) {
       // In place: every pose of the whisk is at the start position.
       CHECK(std::hypot(r.robot.x - 0.85, r.robot.y - 1.275) < 1e-9);
-      const WhiskerMount& m = defaultWhiskerArray()[static_cast<std::size_t>(r.whisker)];
+      const WhiskerMount& m = mounts.at(static_cast<std::size_t>(r.whisker));
       const double dir = r.robot.theta + m.bearing;
       const Vec2 at = r.robot.toWorld(m.base) + r.r * Vec2{std::cos(dir), std::sin(dir)};
       double d = 1e9;
