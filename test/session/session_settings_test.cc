@@ -108,7 +108,7 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
 
 TEST_CASE("Session settings: a bad value in the metadata is an error naming the field",
           "[session]") {
-  const std::string good = metadataOf(unusualOptions());
+  static const std::string good = metadataOf(unusualOptions());  // once: SECTIONs re-enter
   SECTION("working_memory 0 (used to crash --replay)") {
     const std::string e = errorOf(withSetting(good, "mapping.working_memory", 0));
     CHECK(e.find("working_memory") != std::string::npos);
