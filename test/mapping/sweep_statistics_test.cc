@@ -11,6 +11,7 @@
 #include <tuple>
 #include <vector>
 
+#include "support/synthetic_sweep.h"
 #include "support/temp_dir.h"
 
 using namespace crunch;
@@ -18,37 +19,8 @@ using Json = nlohmann::ordered_json;
 
 namespace {
 
-Json row(const std::string& noise, double sigma_r, int ss, int sw, int wm, int seed, double f1,
-         double wall, double proposals) {
-  return Json{{"scene", "default"},      {"noise", noise},   {"sigma_r", sigma_r},
-              {"schedule_steps", ss},    {"sweeps", sw},     {"working_memory", wm},
-              {"seed", seed},            {"precision", 0.7}, {"recall", f1},
-              {"f1", f1},                {"proposals", proposals}, {"wall_s", wall}};
-}
-
-// 2 noise regimes x 4 settings x 2 seeds; (8, 2, 14) costs more than (16, 1, 7) and is worse.
-Json synthetic() {
-  Json rows = Json::array();
-  struct S {
-    int ss, sw, wm;
-    double f1, wall, props;
-  };
-  const S settings[] = {{4, 1, 7, 0.5, 0.2, 50e3},
-                        {8, 1, 7, 0.7, 0.4, 100e3},
-                        {8, 2, 14, 0.6, 1.2, 300e3},
-                        {16, 1, 7, 0.8, 0.9, 250e3}};
-  for (const auto& [noise, sigma, scale] :
-       {std::tuple{"realistic", 0.005, 1.0}, std::tuple{"noisy", 0.025, 0.25}}) {
-    for (const S& s : settings) {
-      for (int seed = 1; seed <= 2; ++seed) {
-        const double d = seed == 1 ? -0.1 : 0.1;  // spread: sd = 0.1 * sqrt(2)
-        rows.push_back(row(noise, sigma, s.ss, s.sw, s.wm, seed, s.f1 * scale + d, s.wall,
-                           s.props));
-      }
-    }
-  }
-  return rows;
-}
+using synthetic_sweep::row;
+Json synthetic() { return synthetic_sweep::sweep(); }
 
 std::vector<SettingSummary> load(const Json& rows) {
   TempDir dir;
@@ -126,6 +98,6 @@ TEST_CASE("noiseLevels: the paper's setting across sigma_r, or none with one lev
   CHECK(levels[0].isPaperSetting());
   CHECK(levels[0].sigma_r < levels[1].sigma_r);
   Json one = Json::array();
-  one.push_back(row("realistic", 0.005, 16, 1, 7, 1, 0.8, 1.0, 10.0));
+  one.push_back(row("realistic", 0.005, 16, 1, 7, 1, 0.8, 0.8, 1.0, 10.0));
   CHECK(noiseLevels(load(one)).empty());
 }
