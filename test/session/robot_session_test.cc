@@ -17,22 +17,15 @@
 #include "crunch_sim/training.h"
 #include "crunch_sim/whisker_rig.h"
 #include "crunch_sim/world.h"
+#include "support/one_table.h"
 #include "support/temp_dir.h"
 
 namespace {
 
 using namespace crunch;
 
-// One table; the robot whisks in place facing its near-left leg (as physics_one_table.json).
-Scene oneTable() {
-  Scene s;
-  s.width = 3.0;
-  s.depth = 3.0;
-  TableSpec t;
-  t.pose = {1.5, 1.5, 0.0};
-  s.tables.push_back(t);
-  return s;
-}
+// One table; the robot whisks in place facing its near-left leg (support/one_table.h).
+Scene oneTable() { return oneTableScene(); }
 
 session::RobotSessionOptions sessionOptions(const Pose2& start) {
   auto models = signal::loadModels(std::string(CRUNCH_SOURCE_DIR) + "/models/sim_models.json");

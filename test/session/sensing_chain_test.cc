@@ -20,6 +20,8 @@ extern "C" {
 #include "whisker/bridge_frame.h"
 }
 
+#include "support/one_table.h"
+
 namespace {
 
 using namespace crunch;
@@ -60,16 +62,8 @@ Pose2 poseOfTick(std::uint32_t t) {
   return {1.0 + 1e-4 * k, 2.0, 0.1 + 1e-4 * k};
 }
 
-// One table; the robot whisks in place facing its near-left leg (as physics_one_table.json).
-Scene oneTable() {
-  Scene s;
-  s.width = 3.0;
-  s.depth = 3.0;
-  TableSpec t;
-  t.pose = {1.5, 1.5, 0.0};
-  s.tables.push_back(t);
-  return s;
-}
+// One table; the robot whisks in place facing its near-left leg (support/one_table.h).
+Scene oneTable() { return oneTableScene(); }
 
 // A rig facing the leg from 0.27 m, its chain carrying the shipped models.
 std::unique_ptr<sim::WhiskerRig> rigAtLeg(const sim::World& world) {
