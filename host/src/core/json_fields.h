@@ -1,4 +1,5 @@
-// Private to the crunch library: checked reading of JSON documents (scene files, map files).
+// Private to the crunch library: checked reading of JSON documents (scene files, map files, models
+// files, recording metadata).
 // Every failure names the field by its path ("tables[2].theta") so the caller's error names the
 // file and the field (ARCHITECTURE.md §4). A failure throws FieldError, which never leaves the
 // reader that uses these helpers: it catches it and returns an Error.
@@ -74,6 +75,53 @@ inline double number(const Json& j, const std::string& path) {
   const double v = j.get<double>();
   if (!std::isfinite(v)) fail(path, "expected a finite number");
   return v;
+}
+
+inline const Json& required(const Json& obj, const std::string& path, std::string_view key) {
+  const auto it = obj.find(key);
+  if (it == obj.end()) fail(member(path, key), "missing (required)");
+  return *it;
+}
+
+inline bool requiredBool(const Json& obj, const std::string& path, std::string_view key) {
+  const Json& j = required(obj, path, key);
+  if (!j.is_boolean()) fail(member(path, key), "expected true or false, got " + j.dump());
+  return j.get<bool>();
+}
+
+// A non-negative integer no larger than `max`.
+inline int count(const Json& j, const std::string& path,
+                 int max = std::numeric_limits<int>::max()) {
+  if (!j.is_number_unsigned() || j.get<std::uint64_t>() > static_cast<std::uint64_t>(max)) {
+    fail(path, "expected an integer from 0 to " + std::to_string(max) + ", got " + j.dump());
+  }
+  return static_cast<int>(j.get<std::uint64_t>());
+}
+
+// Any whole number an int holds (its range is the setting's own validate()'s to check).
+inline int integer(const Json& j, const std::string& path) {
+  if (j.is_number_integer()) {
+    const bool fits = j.is_number_unsigned()
+                          ? j.get<std::uint64_t>() <= std::numeric_limits<int>::max()
+                          : j.get<std::int64_t>() >= std::numeric_limits<int>::min();
+    if (fits) return static_cast<int>(j.get<std::int64_t>());
+  }
+  fail(path, "expected a whole number within int range, got " + j.dump());
+}
+
+inline std::uint64_t unsignedInteger(const Json& j, const std::string& path) {
+  if (!j.is_number_unsigned()) fail(path, "expected a non-negative whole number, got " + j.dump());
+  return j.get<std::uint64_t>();
+}
+
+// `j` as an array of exactly `expected_size` elements.
+inline const Json& array(const Json& j, const std::string& path, size_t expected_size) {
+  expectArray(j, path);
+  if (j.size() != expected_size) {
+    fail(path, "expected " + std::to_string(expected_size) + " elements, got " +
+                   std::to_string(j.size()));
+  }
+  return j;
 }
 
 inline double requiredNumber(const Json& obj, const std::string& path, std::string_view key) {

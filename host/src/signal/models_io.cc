@@ -134,29 +134,6 @@ std::string modelsToJson(const SignalModels& models) {
 
 namespace {
 
-const Json& required(const Json& obj, const std::string& path, std::string_view key) {
-  const auto it = obj.find(key);
-  if (it == obj.end()) fail(member(path, key), "missing (required)");
-  return *it;
-}
-
-// A non-negative integer no larger than `max`.
-int count(const Json& j, const std::string& path, int max = std::numeric_limits<int>::max()) {
-  if (!j.is_number_unsigned() || j.get<std::uint64_t>() > static_cast<std::uint64_t>(max)) {
-    fail(path, "expected an integer from 0 to " + std::to_string(max) + ", got " + j.dump());
-  }
-  return static_cast<int>(j.get<std::uint64_t>());
-}
-
-const Json& array(const Json& j, const std::string& path, size_t expected_size) {
-  expectArray(j, path);
-  if (j.size() != expected_size) {
-    fail(path, "expected " + std::to_string(expected_size) + " elements, got " +
-                   std::to_string(j.size()));
-  }
-  return j;
-}
-
 RadialModel parseRadial(const Json& j) {
   const std::string path = "radial";
   expectObject(j, path, {"external_length", "tip_zone", "whiskers"});
@@ -232,12 +209,6 @@ OrientationModel parseOrientation(const Json& j) {
   return m;
 }
 
-bool boolean(const Json& obj, const std::string& path, std::string_view key) {
-  const Json& j = required(obj, path, key);
-  if (!j.is_boolean()) fail(member(path, key), "expected true or false, got " + j.dump());
-  return j.get<bool>();
-}
-
 PipelineOptions parsePipeline(const Json& j) {
   const std::string path = "pipeline";
   expectObject(j, path, {"detector", "window", "max_episode_samples", "max_held_fraction"});
@@ -273,7 +244,7 @@ PipelineOptions parsePipeline(const Json& j) {
   o.baseline_time_constant_s = requiredNumber(d, dp, "baseline_time_constant_s");
   o.max_held_samples = count(required(d, dp, "max_held_samples"), member(dp, "max_held_samples"),
                              kMaxSamples);
-  o.accept_dropped = boolean(d, dp, "accept_dropped");
+  o.accept_dropped = requiredBool(d, dp, "accept_dropped");
   const std::string wp = "pipeline.window";
   const Json& w = required(j, path, "window");
   expectObject(w, wp, {"samples", "decimation"});
