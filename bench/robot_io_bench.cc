@@ -371,7 +371,7 @@ void BM_ContactLatency(benchmark::State& state) {
     io::BridgeStreamDecoder dec;
     io::SampleAssembler assembler;
     signal::SignalPipeline pipeline = makePipeline();
-    WhiskEvidence evidence(defaultWhiskerArray());
+    WhiskEvidence evidence(defaultWhiskerArray(), WhiskerBeam{});
     std::vector<ContactReport> out_reports;
     std::vector<FreeRay> out_rays;
     out_reports.reserve(16);

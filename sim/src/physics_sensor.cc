@@ -29,6 +29,27 @@ bool clearOfEverything(const World& world, const std::vector<WhiskerMount>& moun
   return true;
 }
 
+// Where the robot comes from to reach `pose`: the pose itself if its straight whiskers are clear
+// of everything there; else backed off along its heading, in 5 mm steps up to kMaxApproach, to
+// the first place where they are (and the body is). The pose itself if there is none.
+constexpr double kMaxApproach = 0.25;   // metres
+constexpr double kApproachSpeed = 0.05;  // m/s: slower than roaming, as the robot closes in
+
+Pose2 approachStart(const World& world, const std::vector<WhiskerMount>& mounts,
+                    const Pose2& pose, double z) {
+  const Vec2 back{-std::cos(pose.theta), -std::sin(pose.theta)};
+  for (double d = 0.0; d <= kMaxApproach + 1e-9; d += 0.005) {
+    const Pose2 q{pose.x + d * back.x(), pose.y + d * back.y(), pose.theta};
+    if (world.bodyCollides(q)) break;
+    bool clear = true;
+    for (const WhiskerMount& m : mounts) {
+      if (world.castRay(q.toWorld(m.base), q.theta + m.bearing, m.length + 0.003, z)) clear = false;
+    }
+    if (clear) return q;
+  }
+  return pose;
+}
+
 }  // namespace
 
 PhysicsSensorModel::Options physicsSensorOptions(std::uint64_t seed) {
@@ -41,7 +62,16 @@ double ReportErrors::sigmaR() const {
   return reports ? std::sqrt(sum_r2 / reports) : 0.0;
 }
 double ReportErrors::sigmaPhi() const {
-  return reports ? std::sqrt(sum_phi2 / reports) : 0.0;
+  return oriented ? std::sqrt(sum_phi2 / oriented) : 0.0;
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double at = q * static_cast<double>(v.size() - 1);
+  const auto i = static_cast<std::size_t>(at);
+  if (i + 1 >= v.size()) return v.back();
+  return v[i] + (at - static_cast<double>(i)) * (v[i + 1] - v[i]);
 }
 
 Status PhysicsSensorModel::Options::validate() const {
@@ -76,14 +106,18 @@ Result<std::unique_ptr<PhysicsSensorModel>> PhysicsSensorModel::create(
   if (!rig) return rig.error();
   if (auto s = rig.value()->chain().setModels(models); !s) return s.error();
   auto model = std::unique_ptr<PhysicsSensorModel>(
-      new PhysicsSensorModel(std::move(rig).value(), std::move(mounts), options));
+      new PhysicsSensorModel(world, std::move(rig).value(), std::move(mounts), options));
   model->clear_pose_ = *start;
+  for (const OrientedRect& f : world.footprints()) {
+    if (std::max(f.size_x, f.size_y) <= 0.1) model->legs_.push_back(f);
+  }
   return model;
 }
 
-PhysicsSensorModel::PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig,
+PhysicsSensorModel::PhysicsSensorModel(const World& world, std::unique_ptr<WhiskerRig> rig,
                                        std::vector<WhiskerMount> mounts, const Options& options)
-    : rig_(std::move(rig)),
+    : world_(world),
+      rig_(std::move(rig)),
       mounts_(std::move(mounts)),
       options_(options),
       scores_(mounts_.size()) {}
@@ -98,8 +132,16 @@ void PhysicsSensorModel::score(std::uint32_t set) {
     sc = Score{};
     sc.scored = t.touched;
     if (t.touched) {
-      sc.err_r = rep.r - t.r_at_peak;
-      sc.err_phi = wrapPeriod(rep.phi - (t.surface_tangent - t.pose_at_peak.theta), kPi);
+      const WhiskerMount& m = mounts_[w];
+      const Vec2 at = rep.robot.toWorld(m.base + rep.r * Vec2{std::cos(m.bearing),
+                                                              std::sin(m.bearing)});
+      sc.err_r = rep.r - t.r_at_touch;
+      sc.err_pos = (at - t.point_at_touch).norm();
+      sc.err_phi = wrapPeriod(rep.phi - (t.tangent_at_touch - rep.robot.theta), kPi);
+      sc.true_tip = t.r_at_touch >= m.length - rig_->chain().tipZone();
+      sc.on_leg = std::any_of(legs_.begin(), legs_.end(), [&](const OrientedRect& f) {
+        return closestOnPerimeter(f, t.point_at_touch).distance < 0.005;
+      });
     }
   }
 }
@@ -121,7 +163,23 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
     if (rig_->pipeline().inEpisode()) (void)rig_->finish();
     rig_->resetTruth();
   }
-  robot.place(pose);
+  // The robot arrives at the pose as it would drive there: a teleported straight whisker must
+  // not start inside a wall or a leg (it would be "touching" nothing real). A pose whose whiskers
+  // are not clear is approached along its heading, the whiskers bending on the way: the whisk
+  // then starts pressed, as on the robot (ContactRamp handles both).
+  const Pose2 from = approachStart(world_, mounts_, pose, options_.rig.robot.z);
+  robot.place(from);
+  const double approach = (pose.position() - from.position()).norm();
+  if (approach > 0.0) {
+    (void)robot.drive(kApproachSpeed, 0.0);
+    const long max_approach_steps =
+        static_cast<long>(2.0 * approach / kApproachSpeed / options_.rig.robot.dt) + 1;
+    for (long n = 0; n < max_approach_steps; ++n) {
+      if ((robot.odometry().position() - from.position()).norm() >= approach || robot.bumped()) break;
+      (void)rig_->step();
+    }
+    (void)robot.drive(0.0, 0.0);
+  }
   BodyWhisk::Options wopt;
   wopt.whisker_bearings.clear();
   for (const WhiskerMount& m : mounts_) wopt.whisker_bearings.push_back(m.bearing);
@@ -163,14 +221,25 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   errors_.episodes = static_cast<int>(chain.counts().episodes);
   errors_.no_radial = chain.evidence().counts().no_radial;
   errors_.no_orientation = chain.evidence().counts().no_orientation;
+  errors_.no_ramp = chain.evidence().counts().no_ramp;
   for (std::size_t k = first; k < out.size(); ++k) {
-    const Score& sc = scores_[static_cast<std::size_t>(out[k].whisker)];
+    const ContactReport& rep = out[k];
+    const Score& sc = scores_[static_cast<std::size_t>(rep.whisker)];
     if (sc.scored) {
       ++errors_.reports;
       errors_.sum_r += sc.err_r;
       errors_.sum_r2 += sc.err_r * sc.err_r;
-      errors_.sum_phi += sc.err_phi;
-      errors_.sum_phi2 += sc.err_phi * sc.err_phi;
+      if (rep.oriented) {
+        ++errors_.oriented;
+        errors_.sum_phi += sc.err_phi;
+        errors_.sum_phi2 += sc.err_phi * sc.err_phi;
+      }
+      errors_.position_errors.push_back(sc.err_pos);
+      (sc.on_leg ? errors_.leg_position_errors : errors_.wall_position_errors)
+          .push_back(sc.err_pos);
+      const WhiskerMount& m = mounts_[static_cast<std::size_t>(rep.whisker)];
+      const bool reported_shaft = rep.r < m.length - rig_->chain().tipZone();
+      ++errors_.tip_confusion[sc.true_tip ? 0 : 1][reported_shaft ? 1 : 0];
     } else {
       ++errors_.unscored;
     }

@@ -87,6 +87,11 @@ void WhiskerRig::trackTruth() {
     const BaseAngles a = robot_->baseAngles(w);
     const double angle = std::hypot(a.horizontal, a.vertical);
     WhiskerTruth& t = truth_[static_cast<std::size_t>(w)];
+    if (!t.touched) {
+      t.r_at_touch = contact->r;
+      t.point_at_touch = contact->point;
+      t.tangent_at_touch = std::atan2(contact->normal.y(), contact->normal.x()) + kPi / 2.0;
+    }
     if (!t.touched || angle > t.peak_angle) {
       t.touched = true;
       t.peak_angle = angle;

@@ -149,26 +149,36 @@ TEST_CASE("SensingChain: free rays every kFreeEvery samples, at the pose of each
   auto chain = SensingChain::create(chainOptions());
   REQUIRE(chain);
   SensingChain& c = *chain.value();
-  constexpr std::uint32_t kTicks = 5 * WhiskEvidence::kFreeEvery + 10;
-  for (std::uint32_t t = 0; t < kTicks; ++t) c.feed(tickBytes(t), poseOfTick(t));
-  REQUIRE(c.contactMask() == 0);
+  constexpr std::uint32_t kEvery = WhiskEvidence::kFreeEvery;
+  // Until the detectors have calibrated their rest they cannot say free: no rays.
+  constexpr std::uint32_t kWarm = 25 * kEvery;
+  for (std::uint32_t t = 0; t < kWarm; ++t) c.feed(tickBytes(t), poseOfTick(t));
+  REQUIRE(c.calibrated());
   std::vector<ContactReport> reports;
   std::vector<FreeRay> rays;
   c.endWhisk(reports, rays);
+  const std::size_t warm_rays = rays.size();
+  CHECK(warm_rays < (kWarm / kEvery - 1) * defaultWhiskerArray().size() / 2);
+  rays.clear();
+  constexpr std::uint32_t kTicks = 5 * kEvery + 10;
+  for (std::uint32_t t = kWarm; t < kWarm + kTicks; ++t) c.feed(tickBytes(t), poseOfTick(t));
+  REQUIRE(c.contactMask() == 0);
+  c.endWhisk(reports, rays);
   CHECK(reports.empty());
-  // Samples 0, 120, ..., 480 started a negative-evidence sample; the one started at 600 is still
-  // accumulating and goes to the next whisk.
-  REQUIRE(rays.size() == 5 * defaultWhiskerArray().size());
+  // The sample started at kWarm - kEvery (accumulating at the first endWhisk) and those started
+  // at kWarm, ..., kWarm + 4 kEvery; the one started at kWarm + 5 kEvery is still accumulating
+  // and goes to the next whisk.
+  REQUIRE(rays.size() == 6 * defaultWhiskerArray().size());
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
-  for (std::size_t i = 0; i < 5; ++i) {
-    const Pose2 p = poseOfTick(static_cast<std::uint32_t>(i * WhiskEvidence::kFreeEvery));
+  for (std::size_t i = 0; i < 6; ++i) {
+    const Pose2 p = poseOfTick(static_cast<std::uint32_t>(kWarm - kEvery + i * kEvery));
     for (std::size_t w = 0; w < mounts.size(); ++w) {
       const FreeRay& r = rays[i * mounts.size() + w];
       CHECK((r.a - p.toWorld(mounts[w].base)).norm() < 1e-12);
       CHECK((r.b - r.a).norm() == Approx(mounts[w].length));
     }
   }
-  CHECK(c.counts().whisks == 1);
+  CHECK(c.counts().whisks == 2);
   rays.clear();
   c.endWhisk(reports, rays);  // nothing new sampled
   CHECK(rays.empty());

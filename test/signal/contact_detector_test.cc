@@ -14,7 +14,6 @@ using namespace crunch::signal::testing;
 namespace {
 
 constexpr double kRadPerCode = 1.0 / kCodesPerRadian;
-constexpr double kPi = std::numbers::pi;
 
 // Drives one detector sample by sample and remembers when each event happened.
 struct Driver {
@@ -253,7 +252,8 @@ TEST_CASE("ContactDetector: samples before the first valid one are only counted"
   CHECK(std::abs(d.det.referenceAlpha() - kRestCode) < 30);
 }
 
-TEST_CASE("ContactDetector: a whisker without valid data is lost and recalibrates", "[signal]") {
+TEST_CASE("ContactDetector: a lost whisker comes back measured against its own rest",
+          "[signal]") {
   ContactDetectorOptions o;
   Driver d(o);
   d.quiet(3000, 4.0);
@@ -264,12 +264,32 @@ TEST_CASE("ContactDetector: a whisker without valid data is lost and recalibrate
   CHECK(d.firstOf(DetectorEvent::kLost) == gap + o.max_held_samples);
   CHECK(d.det.state() == DetectorState::kNoData);
   CHECK(d.det.theta() == 0.0);
-  // The magnet came back 300 codes off: a new rest, no onset from the jump.
-  const long back = d.n;
-  d.quiet(3000, 4.0, 300.0);
-  CHECK(d.countOf(DetectorEvent::kReady) == 2);
-  CHECK(d.events.back().first == back + o.settle_samples + o.calibration_samples - 1);
-  CHECK(d.countOf(DetectorEvent::kOnset) == 1);
+  SECTION("still bent: in contact from the first sample back, the bend never taken as rest") {
+    const long back = d.n;
+    for (int i = 0; i < 3000; ++i) d.push(0.01, 0.0, 4.0);
+    CHECK(d.det.inContact());
+    CHECK(d.countOf(DetectorEvent::kReady) == 1);
+    CHECK(d.countOf(DetectorEvent::kOnset) == 2);
+    CHECK(d.events.back() ==
+          std::pair<long, DetectorEvent>{back + o.settle_samples, DetectorEvent::kOnset});
+    CHECK(d.det.deflection().x() == Approx(0.01).epsilon(0.1));
+  }
+  SECTION("back at rest: quiet at once, no new calibration") {
+    const long back = d.n;
+    d.quiet(3000, 4.0);
+    CHECK(d.det.state() == DetectorState::kQuiet);
+    CHECK(d.countOf(DetectorEvent::kReady) == 1);
+    CHECK(d.countOf(DetectorEvent::kOnset) == 1);
+    CHECK(d.events.back().first < back);
+  }
+  SECTION("restart() forgets the rest: the magnet 300 codes off is a new rest, no onset") {
+    d.det.restart();
+    const long back = d.n;
+    d.quiet(3000, 4.0, 300.0);
+    CHECK(d.countOf(DetectorEvent::kReady) == 2);
+    CHECK(d.events.back().first == back + o.settle_samples + o.calibration_samples - 1);
+    CHECK(d.countOf(DetectorEvent::kOnset) == 1);
+  }
 }
 
 TEST_CASE("ContactDetector: a rest next to the 16-bit wrap reads continuously", "[signal]") {

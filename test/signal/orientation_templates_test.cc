@@ -16,7 +16,6 @@ using namespace crunch::signal::testing;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 constexpr double kBearings[kWhiskers] = {-33.75 * kDegree, -11.25 * kDegree, 11.25 * kDegree,
                                          33.75 * kDegree};
 

@@ -31,6 +31,7 @@ double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
   // f(theta_L) = theta_L + m pi/2 + pi/2 as a line direction.
   const double side_dir = leg.pose.theta + (pp.side + 1) * (kPi / 2);
   const double dr = pp.distance / p.sigma_r_shapelet;
+  if (!s.oriented) return dr * dr;  // an edge or point contact: no orientation to compare
   const double dth = wrapPeriod(side_dir - s.phi, kPi) / p.sigma_theta_shapelet;
   return dr * dr + dth * dth;
 }

@@ -126,8 +126,16 @@ Vec2 inwardNormal(const Shapelet& s) {
 }  // namespace
 
 void Sampler::primeLeg(int slot, double beta) {
-  const ModelParams& p = bb_.params();
   const Shapelet& s = bb_.shapelet(slot);
+  LegHyp probe;
+  probe.pose = s.oriented ? legOnFace(s) : legAtPoint(s);
+  probe.side = bb_.params().leg_side;
+  const int32_t parent = sampleParent(probe, kNone);
+  proposeLegBirth(probe.pose, parent, beta);
+}
+
+Pose2 Sampler::legOnFace(const Shapelet& s) {
+  const ModelParams& p = bb_.params();
   const double half = 0.5 * p.leg_side;
   const Vec2 along{std::cos(s.phi), std::sin(s.phi)};
   const Vec2 in = inwardNormal(s);
@@ -140,7 +148,7 @@ void Sampler::primeLeg(int slot, double beta) {
     bb_.shapeletsNear({s.x, s.y}, near);
     for (int32_t o : near.span()) {
       const Shapelet& so = bb_.shapelet(o);
-      if (o == slot || std::abs(wrapPeriod(so.phi - s.phi, kPi)) < kPi / 4) continue;
+      if (!so.oriented || std::abs(wrapPeriod(so.phi - s.phi, kPi)) < kPi / 4) continue;
       if (std::hypot(so.x - s.x, so.y - s.y) > 2.0 * p.leg_side) continue;
       if (partner < 0 || rng_.uniform() < 0.5) partner = o;
     }
@@ -159,12 +167,60 @@ void Sampler::primeLeg(int slot, double beta) {
     c = Vec2{s.x, s.y} + half * in + rng_.uniform(-half, half) * along;
   }
   c += Vec2{rng_.normal(0, opt_.prime_sigma_r), rng_.normal(0, opt_.prime_sigma_r)};
-  LegHyp probe;
-  probe.pose = {c.x(), c.y(), wrapPeriod(s.phi + rng_.normal(0, opt_.prime_sigma_theta), kPi / 2)};
-  probe.side = p.leg_side;
-  const int32_t parent = sampleParent(probe, kNone);
+  return {c.x(), c.y(), wrapPeriod(s.phi + rng_.normal(0, opt_.prime_sigma_theta), kPi / 2)};
+}
 
-  proposeLegBirth(probe.pose, parent, beta);
+Pose2 Sampler::legAtPoint(const Shapelet& s) {
+  // An edge or point contact (no orientation): the leg lies beyond the point as seen from the
+  // whisker, its centre between a face's and a corner's distance from it, turned as the legs
+  // already believed around it say (axisFromLegs), or any way.
+  const ModelParams& p = bb_.params();
+  const double half = 0.5 * p.leg_side;
+  Vec2 away = Vec2{s.x - s.ox, s.y - s.oy};
+  away = away.norm() > 0.0 ? Vec2(away.normalized()) : Vec2{1.0, 0.0};
+  const Vec2 c = Vec2{s.x, s.y} + rng_.uniform(half, half * std::sqrt(2.0)) * away +
+                 Vec2{rng_.normal(0, opt_.prime_sigma_r), rng_.normal(0, opt_.prime_sigma_r)};
+  const double theta = axisFromLegs(c, -1, rng_.uniform(0.0, kPi / 2)) +
+                       rng_.normal(0, opt_.prime_sigma_theta);
+  return {c.x(), c.y(), wrapPeriod(theta, kPi / 2)};
+}
+
+double Sampler::axisFromLegs(const Vec2& c, int32_t self, double fallback) {
+  // Another leg at a table side's or diagonal's distance from c gives the table's axes (modulo
+  // pi/2) as a table would hold both; each such leg is equally likely to be chosen.
+  const ModelParams& p = bb_.params();
+  const double w = p.table_width - p.leg_side, d = p.table_depth - p.leg_side;
+  const double diag = std::hypot(w, d), diag_angle = std::atan2(d, w);
+  const double tol = 2.0 * p.leg_side;
+  double axis = fallback;
+  int seen = 0;
+  bb_.legsNear(c, diag + tol, [&](int32_t o) {
+    const LegHyp& l = bb_.leg(o);
+    if (o == self || !l.alive) return;
+    const Vec2 v = l.pose.position() - c;
+    const double len = v.norm(), dir = std::atan2(v.y(), v.x());
+    double a;
+    if (std::abs(len - w) < tol || std::abs(len - d) < tol) a = dir;
+    else if (std::abs(len - diag) < tol) a = dir + (rng_.uniform() < 0.5 ? -diag_angle : diag_angle);
+    else return;
+    if (rng_.uniform() * ++seen < 1.0) axis = a;
+  });
+  return axis;
+}
+
+bool Sampler::pointSupported(const Vec2& c) const {
+  // Shapelets near c, none of them oriented: a leg that only point contacts support, whose
+  // orientation nothing but its table constrains.
+  IdSet<64> near;
+  bb_.shapeletsNear(c, near);
+  bool any = false;
+  for (int32_t o : near.span()) {
+    const Shapelet& sh = bb_.shapelet(o);
+    if ((Vec2{sh.x, sh.y} - c).norm() > bb_.params().shapeletLinkRadius()) continue;
+    if (sh.oriented) return false;
+    any = true;
+  }
+  return any;
 }
 
 void Sampler::proposeLegBirth(const Pose2& pose, int32_t parent, double beta) {
@@ -302,12 +358,17 @@ void Sampler::proposeChild(int32_t table, double beta) {
 void Sampler::proposeParent(int32_t leg, double beta) {
   const ModelParams& p = bb_.params();
   const LegHyp l = bb_.leg(leg);
+  // A leg only point contacts support has no orientation of its own: the table's axes come from
+  // the legs at a side's or diagonal's distance, and the legs so supported that the table takes
+  // turn with it (below).
+  const bool free_turn = opt_.smart_parent && pointSupported(l.pose.position());
+  const double axis = free_turn ? axisFromLegs(l.pose.position(), leg, l.pose.theta) : l.pose.theta;
   // The 8 table placements with this leg at a corner: 2 orientations (modulo pi) x 4 corners.
   std::array<Pose2, 8> place;
   std::array<double, 8> weight;
   double total = 0.0;
   for (int k = 0; k < 8; ++k) {
-    const double th = wrapPeriod(l.pose.theta + (k / 4) * (kPi / 2), kPi);
+    const double th = wrapPeriod(axis + (k / 4) * (kPi / 2), kPi);
     const Pose2 frame{0, 0, th};
     const Vec2 off = frame.toWorld(p.cornerOffset(k % 4));
     place[static_cast<size_t>(k)] = {l.pose.x - off.x(), l.pose.y - off.y(), th};
@@ -365,6 +426,19 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   const int32_t table = bb_.addTable(pose);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
+  // Legs whose orientation nothing but their table constrains turn with it.
+  IdSet<5> turned;
+  std::array<Pose2, 5> turned_from;
+  if (free_turn) {
+    for (int32_t o : t.legs.span()) {
+      if (bb_.leg(o).parent != table || !pointSupported(bb_.leg(o).pose.position())) continue;
+      turned_from[static_cast<size_t>(turned.n)] = bb_.leg(o).pose;
+      turned.add(o);
+      Pose2 q = bb_.leg(o).pose;
+      q.theta = wrapPeriod(pose.theta, kPi / 2);
+      bb_.moveLeg(o, q);
+    }
+  }
   IdSet<8> emptied;
   for (int32_t tab : t.tables.span()) {
     if (bb_.table(tab).n_children == 0) {
@@ -378,6 +452,7 @@ void Sampler::proposeParent(int32_t leg, double beta) {
     for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
     return;
   }
+  for (int i = 0; i < turned.n; ++i) bb_.moveLeg(turned.ids[i], turned_from[static_cast<size_t>(i)]);
   for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
   bb_.setParent(leg, l.parent);
   for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);

@@ -320,6 +320,7 @@ void drawShapelets(const Painter& p, const Map& map) {
   cairo_set_line_width(p.cr(), kShapeletWidth);
   cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_ROUND);
   for (const Shapelet& s : map.shapelets) {
+    if (!s.oriented) continue;  // an edge or point contact: its dot only
     const Vec2 centre{s.x, s.y};
     const Vec2 half = 0.5 * kShapeletLength * Vec2{std::cos(s.phi), std::sin(s.phi)};
     p.moveTo(centre - half);
@@ -547,6 +548,10 @@ void drawSnapshotLayers(const Painter& p, const BlackboardSnapshot& snap) {
   cairo_set_line_width(cr, 3.0);
   cairo_set_line_cap(cr, CAIRO_LINE_CAP_ROUND);
   for (const Shapelet& s : snap.shapelets) {
+    if (!s.oriented) {  // an edge or point contact: a dot
+      p.dotPath({s.x, s.y}, 0.25 * kShapeletLength);
+      continue;
+    }
     const double hx = 0.5 * kShapeletLength * std::cos(s.phi);
     const double hy = 0.5 * kShapeletLength * std::sin(s.phi);
     p.moveTo(Vec2{s.x - hx, s.y - hy});

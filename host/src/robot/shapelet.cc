@@ -32,6 +32,7 @@ bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mount
   out.y = contact.y();
   out.phi = wrapHalfTurn(rep.phi + rep.robot.theta);
   out.tau = 1.0;
+  out.oriented = rep.oriented;
   out.ox = origin.x();
   out.oy = origin.y();
   out.pose_index = pose_index;

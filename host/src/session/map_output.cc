@@ -42,6 +42,7 @@ std::string sessionReportJson(const RobotSession& session, const Map& map) {
     shapelets.push_back({{"x", sh.x},
                          {"y", sh.y},
                          {"phi", sh.phi},
+                         {"oriented", sh.oriented},
                          {"whisker", sh.whisker},
                          {"pose", sh.pose_index},
                          {"from", {sh.ox, sh.oy}}});
@@ -73,7 +74,10 @@ std::string sessionReportJson(const RobotSession& session, const Map& map) {
                          {"whisks", c.whisks},
                          {"reports", c.reports},
                          {"no_radial", e.no_radial},
-                         {"no_orientation", e.no_orientation}}},
+                         {"no_orientation", e.no_orientation},
+                         {"no_ramp", e.no_ramp},
+                         {"shaft", e.shaft},
+                         {"flat", e.flat}}},
                        {"final_pose", {p.x, p.y, p.theta}},
                        {"map", {{"tables", map.tables.size()}, {"shapelets", map.stats.shapelets}}},
                        {"shapelets", shapelets}};

@@ -29,7 +29,7 @@ Result<std::unique_ptr<SensingChain>> SensingChain::create(const SensingChainOpt
 
 SensingChain::SensingChain(const SensingChainOptions& options, signal::SignalPipeline pipeline)
     : pipeline_(std::move(pipeline)),
-      evidence_(options.mounts),
+      evidence_(options.mounts, options.beam),
       pose_history_(kPoseHistory, options.start),
       free_pose_(options.start) {
   evidence_.begin();
@@ -41,6 +41,20 @@ std::uint32_t SensingChain::contactMask() const {
     if (pipeline_.detector(w).inContact()) mask |= 1u << w;
   }
   return mask;
+}
+
+std::uint32_t SensingChain::unreadyMask() const {
+  std::uint32_t mask = 0;
+  for (int w = 0; w < signal::kWhiskers; ++w) {
+    if (!pipeline_.detector(w).ready()) mask |= 1u << w;
+  }
+  return mask;
+}
+
+Status SensingChain::setModels(const signal::SignalModels& models) {
+  if (auto s = pipeline_.setModels(models); !s) return s;
+  evidence_.setModels(models);
+  return okStatus();
 }
 
 bool SensingChain::calibrated() const {
@@ -64,7 +78,7 @@ const signal::ContactEpisode* SensingChain::onSample(const signal::SampleFrame& 
   const std::uint64_t index = pipeline_.counts().samples;  // this sample's pipeline index
   pose_history_[index % kPoseHistory] = pose;
   ++counts_.samples;
-  const signal::ContactEpisode* ep = pipeline_.push(frame);
+  const signal::ContactEpisode* ep = pipeline_.push(frame, pose);
   if (ep != nullptr) takeEpisode(*ep);
   // Negative evidence: one sample of pose and contacts every kFreeEvery pipeline samples.
   if (index % WhiskEvidence::kFreeEvery == 0) {
@@ -72,7 +86,7 @@ const signal::ContactEpisode* SensingChain::onSample(const signal::SampleFrame& 
     free_pose_ = pose;
     free_mask_ = 0;
   }
-  free_mask_ |= contactMask();
+  free_mask_ |= contactMask() | unreadyMask();
   return ep;
 }
 

@@ -47,6 +47,12 @@ ContactDetector::ContactDetector(const ContactDetectorOptions& options)
 }
 
 void ContactDetector::restart() {
+  has_rest_ = false;
+  resuming_ = false;
+  lose();
+}
+
+void ContactDetector::lose() {
   state_ = DetectorState::kNoData;
   deflection_.setZero();
   theta_ = 0.0;
@@ -98,6 +104,18 @@ DetectorEvent ContactDetector::push(const WhiskerReading& reading) {
   if (used) {
     ++counts_.used;
     consecutive_held_ = 0;
+    if (state_ == DetectorState::kNoData && has_rest_) {
+      // Back after a loss: the rest is the whisker's, not the data link's, so it still holds.
+      // The filters restart on this sample and settle; then a whisker still bent (around the
+      // leg that clamped its sensor) reads as in contact.
+      last_value_ = {signedCodeDifference(reading.alpha, ref_alpha_) * options_.radians_per_code,
+                     signedCodeDifference(reading.beta, ref_beta_) * options_.radians_per_code};
+      filter_a_.reset(last_value_.x());
+      filter_b_.reset(last_value_.y());
+      calib_seen_ = 0;
+      resuming_ = true;
+      startCalibration();
+    }
     if (state_ == DetectorState::kNoData) {
       // A new reference: this code reads as 0 rad, and the filters start at rest on it.
       ref_alpha_ = reading.alpha;
@@ -113,7 +131,7 @@ DetectorEvent ContactDetector::push(const WhiskerReading& reading) {
     ++counts_.held;
     if (state_ == DetectorState::kNoData) return DetectorEvent::kNone;
     if (++consecutive_held_ > options_.max_held_samples) {
-      restart();
+      lose();
       return DetectorEvent::kLost;
     }
   }
@@ -131,6 +149,18 @@ DetectorEvent ContactDetector::push(const WhiskerReading& reading) {
         ++calib_seen_;
         return DetectorEvent::kNone;
       }
+      if (resuming_) {  // settled after a loss: measured against the rest it had
+        resuming_ = false;
+        deflection_ = smoothed - rest_;
+        theta_ = deflection_.norm();
+        below_release_ = 0;
+        if (theta_ > onsetThreshold()) {
+          state_ = DetectorState::kContact;
+          return DetectorEvent::kOnset;
+        }
+        state_ = DetectorState::kQuiet;
+        return DetectorEvent::kNone;
+      }
       ++calib_n_;
       const Eigen::Vector2d d = smoothed - calib_mean_;
       calib_mean_ += d / calib_n_;
@@ -144,6 +174,7 @@ DetectorEvent ContactDetector::push(const WhiskerReading& reading) {
       }
       rest_ = calib_mean_;
       variance_ = var;
+      has_rest_ = true;
       deflection_ = smoothed - rest_;
       theta_ = deflection_.norm();
       below_release_ = 0;

@@ -19,12 +19,23 @@ Status PipelineOptions::validate() const {
   if (!(max_held_fraction >= 0.0 && max_held_fraction <= 1.0)) {
     return Error{"max_held_fraction: expected a number in [0, 1]"};
   }
+  if (Status s = ramp.validate(); !s.ok()) return Error{"ramp." + s.error().message};
   return okStatus();
 }
+
+namespace {
+int delaySamples(const SmoothingFilter::Options& smoothing) {
+  return static_cast<int>(std::lround(SmoothingFilter(smoothing).groupDelayAtDc() * kSampleRateHz));
+}
+}  // namespace
 
 Result<SignalPipeline> SignalPipeline::create(const PipelineOptions& options) {
   if (Status s = options.validate(); !s.ok())
     return Error{"signal pipeline options: " + s.error().message};
+  if (delaySamples(options.detector.smoothing) >= kPoseRing) {
+    return Error{"signal pipeline options: detector.smoothing: a group delay of more than " +
+                 std::to_string(kPoseRing) + " samples"};
+  }
   return SignalPipeline(options);
 }
 
@@ -32,9 +43,11 @@ SignalPipeline::SignalPipeline(const PipelineOptions& options)
     : options_(options),
       detectors_{ContactDetector(options.detector), ContactDetector(options.detector),
                  ContactDetector(options.detector), ContactDetector(options.detector)},
-      recorder_(options.window) {
+      recorder_(options.window),
+      delay_(delaySamples(options.detector.smoothing)) {
   static_assert(kWhiskers == 4, "detectors_ is initialised for four whiskers");
   episode_.window = recorder_.window();
+  for (RampFitter& r : ramps_) r = RampFitter(options.ramp);
 }
 
 Status SignalPipeline::setModels(const SignalModels& models) {
@@ -79,6 +92,7 @@ void SignalPipeline::startEpisode() {
   recorder_.start();
   for (int w = 0; w < kWhiskers; ++w) {
     episode_.whiskers[w] = WhiskerContact{};
+    ramps_[w].reset();
     // The onset sample itself belongs to the episode.
     held_at_start_[w] = detectors_[w].counts().held - (detectors_[w].lastHeld() ? 1 : 0);
   }
@@ -98,6 +112,16 @@ void SignalPipeline::startEpisode() {
 }
 
 const ContactEpisode* SignalPipeline::push(const SampleFrame& frame) {
+  return step(frame, nullptr);
+}
+
+const ContactEpisode* SignalPipeline::push(const SampleFrame& frame, const Pose2& pose) {
+  return step(frame, &pose);
+}
+
+const ContactEpisode* SignalPipeline::step(const SampleFrame& frame, const Pose2* pose) {
+  const std::uint64_t index = counts_.samples;
+  if (pose != nullptr) poses_[index % kPoseRing] = *pose;
   ++counts_.samples;
   bool onset = false;
   std::array<DetectorEvent, kWhiskers> events;
@@ -130,6 +154,11 @@ const ContactEpisode* SignalPipeline::push(const SampleFrame& frame) {
       }
     }
     if (events[w] == DetectorEvent::kLost) c.lost = true;
+    if (c.touched && pose != nullptr && index >= static_cast<std::uint64_t>(delay_)) {
+      // The first contact's ramp; a lost whisker's readings are not deflections.
+      if (c.lost || !d.ready()) ramps_[w].close();
+      else ramps_[w].push(d.theta(), poses_[(index - delay_) % kPoseRing], index - delay_);
+    }
     if (c.peak_sample < 0 || d.theta() > c.f1) {  // eq. 1
       c.f1 = d.theta();
       c.peak_sample = t;
@@ -159,6 +188,8 @@ const ContactEpisode* SignalPipeline::completeEpisode() {
     WhiskerContact& c = e.whiskers[w];
     c.held_samples = static_cast<std::uint32_t>(detectors_[w].counts().held - held_at_start_[w]);
     c.peak_time_s = static_cast<double>(c.peak_sample) * kSamplePeriod;
+    ramps_[w].close();
+    c.ramp = ramps_[w].result();
     const double held_fraction =
         static_cast<double>(c.held_samples) / static_cast<double>(episode_samples_);
     if (c.lost || held_fraction > options_.max_held_fraction) e.reliable = false;

@@ -22,6 +22,10 @@
 // A whisker without a radial estimate, or an episode without an orientation (window cut short),
 // gives no report; both are counted.
 //
+// Arriving: a pose whose straight whiskers would start inside a wall or leg (the grid is laid
+// out for the body, not for the whiskers) is driven into along its heading from where they are
+// clear, at 5 cm/s, as the robot would arrive; the whisk then starts pressed.
+//
 // Between poses: a whisk that ended with a whisker still in contact is followed by a rest at the
 // clear start pose until the detectors release (at most 1 s), so the next pose starts free.
 //
@@ -51,23 +55,36 @@
 
 namespace crunch::sim {
 
-// Errors of the reports against the simulator's truth.
+// Errors of the reports against the simulator's truth at the whisker's first touch (the point
+// the straight whisker first met: what a located report places; WhiskerTruth::*_at_touch).
 struct ReportErrors {
   int reports = 0;             // reports scored (the truth saw the whisker touch)
   int unscored = 0;            // reports whose whisker the truth never saw touching
   double sum_r = 0.0, sum_r2 = 0.0;      // r_hat - r_true, metres
-  double sum_phi = 0.0, sum_phi2 = 0.0;  // phi_hat - phi_true wrapped to [-pi/2, pi/2), rad
+  // Orientation, scored for flat-surface reports only (ContactReport::oriented): an edge's
+  // "normal" is no truth. phi_hat - phi_true wrapped to [-pi/2, pi/2), radians.
+  int oriented = 0;
+  double sum_phi = 0.0, sum_phi2 = 0.0;
+  // Distance from each scored report's contact point to the true one, metres: all, and split by
+  // what was touched (a leg: a footprint no side of which is longer than 0.1 m; else a wall).
+  std::vector<double> position_errors, leg_position_errors, wall_position_errors;
+  // Tip or shaft (r in the models' tip zone), reported against true: [true shaft][reported shaft].
+  int tip_confusion[2][2] = {{0, 0}, {0, 0}};
   int whisks = 0;
   int episodes = 0;
   int no_radial = 0;           // touched whiskers without an r estimate
   int no_orientation = 0;      // touched whiskers whose episode had no orientation
+  int no_ramp = 0;             // touched whiskers whose contact had no ramp to locate it
   double simulated_s = 0.0;    // simulated time spent sensing
 
   double meanR() const { return reports ? sum_r / reports : 0.0; }
   double sigmaR() const;       // root mean square error, metres
-  double meanPhi() const { return reports ? sum_phi / reports : 0.0; }
+  double meanPhi() const { return oriented ? sum_phi / oriented : 0.0; }
   double sigmaPhi() const;     // root mean square error, radians
 };
+
+// The q-quantile (0..1, linear interpolation) of `v`; 0 for an empty one.
+double quantile(std::vector<double> v, double q);
 
 class PhysicsSensorModel final : public SensorModel {
  public:
@@ -96,17 +113,19 @@ class PhysicsSensorModel final : public SensorModel {
   const WhiskerRig& rig() const { return *rig_; }
 
  private:
-  PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig, std::vector<WhiskerMount> mounts,
-                     const Options& options);
+  PhysicsSensorModel(const World& world, std::unique_ptr<WhiskerRig> rig,
+                     std::vector<WhiskerMount> mounts, const Options& options);
   // Scores the reports the episode just ended gave (bit w: whisker w's first report).
   void score(std::uint32_t set);
 
   // A report's error against the truth, taken when the episode that set it ended.
   struct Score {
     bool scored = false;
-    double err_r = 0.0, err_phi = 0.0;
+    double err_r = 0.0, err_phi = 0.0, err_pos = 0.0;
+    bool true_tip = false, on_leg = false;
   };
 
+  const World& world_;
   std::unique_ptr<WhiskerRig> rig_;
   std::vector<WhiskerMount> mounts_;
   Options options_;
@@ -114,6 +133,7 @@ class PhysicsSensorModel final : public SensorModel {
   std::vector<FreeRay> free_;
   ReportErrors errors_;
   Pose2 clear_pose_;  // where the rig calibrated: every whisker free
+  std::vector<OrientedRect> legs_;  // the World's leg footprints (for scoring by object)
 };
 
 // The options the shipped models were trained with (docs/TRAINING.md), with the Hall noise

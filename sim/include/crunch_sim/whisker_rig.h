@@ -56,6 +56,11 @@ struct WhiskerTruth {
   Vec2 point_at_peak = Vec2::Zero();  // true contact point, arena frame
   double surface_tangent = 0.0;  // the touched surface's direction (normal + pi/2), radians
   Pose2 pose_at_peak;          // robot pose at that sample
+  // The first step of the contact: where the straight whisker first touched (what a located
+  // report places; for a face the tip then slides along it, for an edge the point stays).
+  double r_at_touch = 0.0;
+  Vec2 point_at_touch = Vec2::Zero();
+  double tangent_at_touch = 0.0;
 };
 
 class WhiskerRig {

@@ -103,6 +103,13 @@ class Sampler {
   void begin();
   bool decide(double delta, double beta);
   void primeLeg(int slot, double beta);
+  // primeLeg's leg for an oriented shapelet (on its face) and for a point contact.
+  Pose2 legOnFace(const Shapelet& s);
+  Pose2 legAtPoint(const Shapelet& s);
+  // A table's axis (modulo pi/2) from the legs around c other than `self`, or `fallback`.
+  double axisFromLegs(const Vec2& c, int32_t self, double fallback);
+  // Shapelets lie near c and none is oriented (ContactReport::oriented).
+  bool pointSupported(const Vec2& c) const;
   // Proposes a new leg at `pose` under `parent` (or kNone); the birth moves of priming and of
   // Q(ch(T)) share it.
   void proposeLegBirth(const Pose2& pose, int32_t parent, double beta);

@@ -16,6 +16,9 @@ struct ContactReport {
   double r = 0.0;     // radial distance from the base along the whisker, metres
   double phi = 0.0;   // surface orientation in the robot frame, radians, modulo pi
   Pose2 robot;        // robot pose when the report was taken (exact: zero odometry noise)
+  // phi was measured (a flat surface); false: an edge or a point, whose orientation is unknown
+  // and whose shapelet has no angle term (blackboard/factors.h).
+  bool oriented = true;
 };
 
 // An allocentric shapelet (the observation node of the blackboard).
@@ -23,6 +26,7 @@ struct Shapelet {
   double x = 0.0, y = 0.0;
   double phi = 0.0;     // surface orientation, modulo pi
   double tau = 1.0;     // texture; all surfaces have tau = 1 in the present system
+  bool oriented = true;  // phi measured (ContactReport::oriented)
   double ox = 0.0, oy = 0.0;  // where it was sensed from (the whisker base): the free side
   int pose_index = -1;
   int whisker = -1;

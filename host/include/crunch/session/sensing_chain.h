@@ -25,7 +25,8 @@
 // pipeline samples (counted from the pipeline's first sample) the pose of that sample and the
 // whiskers in contact over the kFreeEvery samples that follow are one WhiskEvidence::sample();
 // endWhisk() turns the samples taken since the previous endWhisk() into free rays (WhiskEvidence
-// applies the +-kFreeGuard contact guard). The sample being accumulated at endWhisk() goes to the
+// applies the +-kFreeGuard contact guard). A whisker whose detector is not ready (lost to a
+// clamped sensor or a silent board, or calibrating) counts as in contact: it cannot say free. The sample being accumulated at endWhisk() goes to the
 // next whisk.
 //
 // Ownership: owns every stage. Thread-safety: none; one control loop (or replay, or simulator
@@ -44,6 +45,7 @@
 #include "crunch/io/bridge_stream.h"
 #include "crunch/io/sample_assembler.h"
 #include "crunch/robot/shapelet.h"
+#include "crunch/robot/whisker_beam.h"
 #include "crunch/session/whisk_evidence.h"
 #include "crunch/signal/pipeline.h"
 
@@ -55,6 +57,7 @@ inline constexpr std::size_t kPoseHistory = std::size_t{1} << 16;
 struct SensingChainOptions {
   signal::PipelineOptions pipeline;
   std::vector<WhiskerMount> mounts;  // the four horizontal whiskers, whisker w on board w
+  WhiskerBeam beam;                  // their mechanics (contacts are located with it)
   Pose2 start;                       // the pose of every sample before the first feed()
 
   // kWhiskers mounts; pipeline.validate() (errors prefixed "pipeline: "); max_episode_samples
@@ -79,7 +82,7 @@ class SensingChain {
 
   // The radial and orientation models (signal::SignalPipeline::setModels). Without them the
   // chain detects episodes but gives no reports (training collects its data so).
-  Status setModels(const signal::SignalModels& models) { return pipeline_.setModels(models); }
+  Status setModels(const signal::SignalModels& models);
 
   // Decodes `bytes` (the next part of the bridge stream) handled with the robot at `pose`. Every
   // episode that ends is first taken (whisk open) or counted (roaming), then passed to
@@ -111,6 +114,8 @@ class SensingChain {
   bool inWhisk() const { return in_whisk_; }
   // Bit w set while whisker w's detector is in contact (what the behaviour acts on).
   std::uint32_t contactMask() const;
+  // Bit w set while whisker w's detector is not ready (lost, calibrating): it cannot say free.
+  std::uint32_t unreadyMask() const;
   // The pipeline's detectors have calibrated their rest (the robot may move).
   bool calibrated() const;
   // Bit w set when whisker w has a report (maybe without r or phi) in the open whisk.
@@ -124,6 +129,8 @@ class SensingChain {
   const io::BridgeStreamCounters& decoderCounters() const { return decoder_.counters(); }
   const io::SampleAssembler::Counters& assemblerCounters() const { return assembler_.counters(); }
   const std::vector<WhiskerMount>& mounts() const { return evidence_.mounts(); }
+  // The models' tip zone, metres from the tip (WhiskEvidence: a report within it is a tip contact).
+  double tipZone() const { return evidence_.tipZone(); }
 
  private:
   SensingChain(const SensingChainOptions& options, signal::SignalPipeline pipeline);

@@ -5,15 +5,25 @@
 //
 // Reports. One whisk may give several contact episodes (the whisker meets the object on the
 // toward and on the return pass); each whisker reports at most once per whisk, from the first
-// episode in which it touched: its f1 is the peak of that first pass (eq. 1), as the shipped
-// models were trained (docs/TRAINING.md):
-//   r      the radial model's estimate (eq. 2), clamped to [0, the mount's length];
-//   phi    the orientation template's angle (eq. 3), which is relative to the heading at the
-//          episode's first contact, turned into the frame of the robot at this whisker's peak,
-//          as a value in [0, pi);
-//   robot  the pose at the peak sample (poseAt(), the caller's odometry per pipeline sample).
-// A whisker without an r estimate, or whose episode has no orientation (window cut short),
-// gives no report; both are counted.
+// episode in which it touched. The contact is located from its ramp against the body's turn
+// (signal/contact_ramp.h, robot/whisker_beam.h; docs/SIGNAL.md, "Locating a contact from the
+// ramp"):
+//   robot  the pose at the touch: the position of the ramp's first sample with the ramp's touch
+//          heading, where the straight rest whisker passes through the contact point;
+//   r      the distance along the whisker whose rampSlope() is the ramp's slope (with the models'
+//          RampCalibration), in [5 mm, the mount's length];
+//   kind   kPoint: the contact's surface orientation is not known from one whisker (an edge,
+//          a leg's corner, or a tip on a face: the ramp is the same), unless two whiskers of the
+//          whisk located tip contacts on one face (kFlat, below);
+//   phi    for kFlat the direction of the line through the two contact points, in the frame of
+//          the touch pose, in [0, pi); for kPoint the orientation template's angle (eq. 3) as
+//          before, which the blackboard does not use.
+// Flat faces: two whiskers' tip contacts (r within the tip zone, RadialOptions) of one whisk
+// whose contact points are further apart than kFlatSpan (more than any leg's diagonal, less than
+// two whiskers' tips can reach on different objects at once) lie on one face: both are kFlat with
+// that face's direction. A whisker without a ramp (it never bent past the ramp's band, or the
+// body did not turn while it did) gives no report: counted as no_ramp, as are whiskers without
+// a radial model (no_radial).
 //
 // Negative evidence: the caller samples the whisk every kFreeEvery pipeline samples with
 // sample(pose, contact mask); a sample whose whisker shows no contact within kFreeGuard
@@ -31,6 +41,8 @@
 #include "crunch/core/geometry.h"
 #include "crunch/blackboard/free_space.h"
 #include "crunch/robot/shapelet.h"
+#include "crunch/robot/whisker_beam.h"
+#include "crunch/signal/models_io.h"
 #include "crunch/signal/pipeline.h"
 
 namespace crunch {
@@ -45,6 +57,8 @@ class WhiskEvidence {
     bool have = false;     // the whisker touched in some episode of this whisk
     bool has_r = false;
     bool has_phi = false;
+    bool located = false;  // a ramp located it
+    bool tip = false;      // r in the tip zone
     double f1 = 0.0;
     ContactReport report;
   };
@@ -52,11 +66,20 @@ class WhiskEvidence {
     int whisks = 0;
     int episodes = 0;
     int reports = 0;
-    int no_radial = 0;       // touched whiskers without an r estimate
-    int no_orientation = 0;  // touched whiskers whose episode had no orientation
+    int no_radial = 0;       // touched whiskers without a radial model (models not set)
+    int no_orientation = 0;  // touched whiskers whose episode had no orientation (unused)
+    int no_ramp = 0;         // touched whiskers whose contact had no ramp to locate it
+    int shaft = 0;           // reports located on the shaft (r below the tip zone)
+    int flat = 0;            // reports on a face located by two whiskers
   };
 
-  explicit WhiskEvidence(std::vector<WhiskerMount> mounts);
+  // Within this distance of the tip (the models' RadialOptions tip zone) a contact is a tip
+  // contact; kFlatSpan: see the top of this file.
+  static constexpr double kFlatSpan = 0.12;
+
+  WhiskEvidence(std::vector<WhiskerMount> mounts, WhiskerBeam beam);
+  // The models in use: their slope calibration and tip zone (nominal until set).
+  void setModels(const signal::SignalModels& models);
 
   // Starts a whisk: forgets the last one's entries and samples.
   void begin();
@@ -71,7 +94,9 @@ class WhiskEvidence {
       const signal::WhiskerContact& c = ep.whiskers[w];
       if (!c.touched || entries_[w].have) continue;
       const std::int64_t peak = c.peak_sample > 0 ? c.peak_sample : 0;
-      fill(entries_[w], w, ep, c, onset, poseAt(ep.start_sample + static_cast<std::uint64_t>(peak)));
+      const Pose2 peak_pose = poseAt(ep.start_sample + static_cast<std::uint64_t>(peak));
+      const Pose2 ramp_pose = c.ramp.valid ? poseAt(c.ramp.first_sample) : peak_pose;
+      fill(entries_[w], w, ep, c, onset, peak_pose, ramp_pose);
       set |= 1u << w;
     }
     return set;
@@ -87,15 +112,21 @@ class WhiskEvidence {
   const Entry& entry(int w) const { return entries_[static_cast<std::size_t>(w)]; }
   const Counts& counts() const { return counts_; }
   const std::vector<WhiskerMount>& mounts() const { return mounts_; }
+  double tipZone() const { return tip_zone_; }
 
  private:
   void fill(Entry& e, std::size_t w, const signal::ContactEpisode& ep,
-            const signal::WhiskerContact& c, const Pose2& onset, const Pose2& peak) const;
+            const signal::WhiskerContact& c, const Pose2& onset, const Pose2& peak,
+            const Pose2& ramp) const;
+  void classifyFaces();
   struct Sample {
     Pose2 pose;
     std::uint32_t mask = 0;
   };
   std::vector<WhiskerMount> mounts_;
+  WhiskerBeam beam_;
+  signal::RampCalibration calibration_;
+  double tip_zone_ = 0.05;
   std::vector<Entry> entries_;
   std::vector<Sample> samples_;
   Counts counts_;

@@ -29,8 +29,13 @@
 // release_sigmas / onset_sigmas for release_samples consecutive samples. min_onset_threshold keeps
 // a noiseless sensor (or one quantised to a constant) from triggering on one code of change.
 //
-// Loss. After max_held_samples consecutive held samples the whisker is lost: its state becomes
-// kNoData, and it calibrates again from the next used sample.
+// Loss. After max_held_samples consecutive held samples (a clamped Hall sensor, a silent board)
+// the whisker is lost: its state becomes kNoData. With the next used sample it is back: its
+// filters restart there and settle (settle_samples, state kCalibrating), then it is measured
+// against the rest it had: the rest belongs to the whisker, not to the data link, so a whisker
+// that is still bent (around the leg that clamped its sensor) reads as in contact and is never
+// taken as free (issue 12: recalibrating there learnt the bend as rest). Only a detector that
+// never finished a calibration calibrates from the next used sample.
 //
 // Allocation-free; not thread-safe.
 #pragma once
@@ -87,7 +92,8 @@ class ContactDetector {
   // Feeds one 500 us sample; returns what changed.
   DetectorEvent push(const WhiskerReading& reading);
 
-  // Forgets everything: state kNoData, counts kept.
+  // Forgets everything, the rest too: state kNoData, calibrates again from the next used sample;
+  // counts kept.
   void restart();
 
   DetectorState state() const { return state_; }
@@ -117,6 +123,7 @@ class ContactDetector {
 
  private:
   void startCalibration();
+  void lose();  // kNoData, keeping the rest
 
   ContactDetectorOptions options_;
   SmoothingFilter filter_a_, filter_b_;
@@ -135,6 +142,8 @@ class ContactDetector {
   Eigen::Vector2d calib_mean_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d calib_m2_ = Eigen::Vector2d::Zero();
 
+  bool has_rest_ = false;  // a calibration finished (and restart() has not been called since)
+  bool resuming_ = false;  // back after a loss: settling, then measured against rest_
   Eigen::Vector2d rest_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d variance_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d deflection_ = Eigen::Vector2d::Zero();

@@ -46,6 +46,8 @@ struct SignalModels {
   OrientationModel orientation;
   // The settings the models were trained with: whoever runs the models runs the pipeline so.
   PipelineOptions pipeline;
+  // Ramp slope -> contact distance (contact_ramp.h); nominal in files before version 3.
+  RampCalibration ramp;
 };
 
 // okStatus(), or an Error naming the field (as in the file) that could not be written or read

@@ -11,6 +11,12 @@
 //                     v
 //               RadialModel (r, tip) + OrientationModel (angle, e(T_i)) --> ContactEpisode
 //
+// Body motion. push(frame, pose) also takes the robot's pose at the sample; each whisker's
+// first contact of an episode is then fitted against the heading (contact_ramp.h: the ramp's
+// slope gives the contact distance, its intercept the heading at the touch). The pose is paired
+// with the smoothed deflection it caused: the pose of smoothingDelaySamples() samples earlier.
+// push(frame) knows no motion and fits no ramp.
+//
 // Episode end. The paper takes f1 as the peak over the body whisk (§2.3-2.4) and the template
 // window as 2 s from the first contact (§2.5). An episode therefore lasts at least the window
 // and until every whisker has released; max_episode_samples (default 10 s) ends one that never
@@ -58,6 +64,7 @@ struct WhiskerContact {
   bool extrapolated = false;       // f1 outside the model's training range
   std::uint32_t held_samples = 0;  // samples held (not measurements) during the episode
   bool lost = false;               // the whisker was lost during the episode
+  ContactRamp ramp;                // its first contact's ramp against the heading (push(frame, pose))
 };
 
 enum class ContactKind {
@@ -105,6 +112,8 @@ class SignalPipeline {
   // Feeds one 500 us sample of the four whiskers. Returns the episode that this sample
   // completed, or nullptr.
   const ContactEpisode* push(const SampleFrame& frame);
+  // The same with the robot's pose at this sample (body motion: contact_ramp.h).
+  const ContactEpisode* push(const SampleFrame& frame, const Pose2& pose);
   // Ends the episode in progress now and returns it (nullptr if none).
   const ContactEpisode* finish();
 
@@ -118,9 +127,13 @@ class SignalPipeline {
   const PipelineOptions& options() const { return options_; }
   bool hasRadialModel() const { return radial_.has_value(); }
   bool hasOrientationModel() const { return orientation_.has_value(); }
+  // The smoothing's group delay, whole samples: theta at sample k is paired with the pose of
+  // sample k - this.
+  int smoothingDelaySamples() const { return delay_; }
 
  private:
   explicit SignalPipeline(const PipelineOptions& options);
+  const ContactEpisode* step(const SampleFrame& frame, const Pose2* pose);
   void startEpisode();
   const ContactEpisode* completeEpisode();
 
@@ -136,6 +149,10 @@ class SignalPipeline {
   std::int64_t episode_samples_ = 0;
   std::array<std::uint64_t, kWhiskers> held_at_start_{};
   ContactEpisode episode_;  // reused; its window and errors are preallocated
+  static constexpr int kPoseRing = 128;  // > any smoothing delay (checked at create())
+  std::array<Pose2, kPoseRing> poses_{};
+  int delay_ = 0;
+  std::array<RampFitter, kWhiskers> ramps_;
 };
 
 }  // namespace crunch::signal

@@ -8,6 +8,7 @@
 
 #include "crunch/core/result.h"
 #include "crunch/signal/contact_detector.h"
+#include "crunch/signal/contact_ramp.h"
 #include "crunch/signal/window.h"
 
 namespace crunch::signal {
@@ -19,6 +20,8 @@ struct PipelineOptions {
   // An episode is reliable if no whisker was lost during it and every whisker held at most
   // this fraction of its samples (sample.h: held samples are not measurements).
   double max_held_fraction = 0.05;
+  // The deflection ramp against the body's heading that locates a contact (contact_ramp.h).
+  RampOptions ramp;
   // okStatus(), or an Error naming the bad field.
   Status validate() const;
 };
