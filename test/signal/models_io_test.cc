@@ -90,7 +90,7 @@ TEST_CASE("Models file: round trip is bit-exact", "[signal]") {
   }
   const Json doc = Json::parse(modelsToJson(m));
   CHECK(doc["format"] == "crunchbot-signal-models");
-  CHECK(doc["version"] == 2);
+  CHECK(doc["version"] == 3);
   CHECK(b.pipeline.detector.min_onset_threshold == m.pipeline.detector.min_onset_threshold);
 }
 
@@ -129,6 +129,7 @@ TEST_CASE("Models file: a version-1 file reads with the pipeline it was trained 
   Json doc = Json::parse(modelsToJson(sampleModels()));
   doc["version"] = 1;
   doc.erase("pipeline");
+  doc.erase("ramp");
   auto v1 = parseModelsJson(doc.dump(), "v1.json");
   REQUIRE(v1.ok());
   PipelineOptions expected;
@@ -140,6 +141,38 @@ TEST_CASE("Models file: a version-1 file reads with the pipeline it was trained 
   doc["pipeline"] = Json::parse(modelsToJson(sampleModels()))["pipeline"];
   CHECK_THAT(parseModelsJson(doc.dump(), "v1.json").error().message,
              Catch::Contains("pipeline: unknown key"));
+}
+
+TEST_CASE("Models file: the ramp settings and calibration round-trip; version 2 reads nominal",
+          "[signal]") {
+  SignalModels m = sampleModels();
+  m.pipeline.ramp.theta_low = 0.015;
+  m.pipeline.ramp.min_points = 55;
+  m.ramp.gain = 0.97;
+  m.ramp.compliance_scale = 1.12;
+  auto back = parseModelsJson(modelsToJson(m), "m.json");
+  REQUIRE(back.ok());
+  CHECK(back.value().pipeline.ramp.theta_low == 0.015);
+  CHECK(back.value().pipeline.ramp.min_points == 55);
+  CHECK(back.value().ramp.gain == 0.97);
+  CHECK(back.value().ramp.compliance_scale == 1.12);
+  // Version 2: no ramp settings, no calibration: the defaults and the nominal beam.
+  Json doc = Json::parse(modelsToJson(m));
+  doc["version"] = 2;
+  doc.erase("ramp");
+  doc["pipeline"].erase("ramp");
+  auto v2 = parseModelsJson(doc.dump(), "v2.json");
+  REQUIRE(v2.ok());
+  CHECK(v2.value().pipeline.ramp.theta_low == RampOptions{}.theta_low);
+  CHECK(v2.value().ramp.gain == 1.0);
+  CHECK(v2.value().ramp.compliance_scale == 1.0);
+  // A version-3 file must carry both; a bad value is named by its path.
+  CHECK_THAT(errorFor([](Json& d) { d.erase("ramp"); }), Catch::Contains("ramp: missing"));
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["ramp"].erase("min_span"); }),
+             Catch::Contains("pipeline.ramp.min_span: missing"));
+  CHECK_THAT(errorFor([](Json& d) { d["ramp"]["gain"] = -1.0; }), Catch::Contains("ramp.gain"));
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["ramp"]["theta_high"] = 0.001; }),
+             Catch::Contains("pipeline.ramp.theta_high"));
 }
 
 TEST_CASE("Models file: a missing, unreadable or malformed file names the file", "[signal]") {
@@ -172,13 +205,15 @@ TEST_CASE("Models file: a missing, unreadable or malformed file names the file",
 
 TEST_CASE("Models file: wrong format or version is refused first", "[signal]") {
   CHECK(errorFor([](Json&) {}) == "(ok)");
-  CHECK_THAT(errorFor([](Json& d) { d["version"] = 3; }),
-             Catch::Contains("models.json: version: unsupported version 3"));
+  CHECK_THAT(errorFor([](Json& d) { d["version"] = 4; }),
+             Catch::Contains("models.json: version: unsupported version 4"));
+  CHECK_THAT(errorFor([](Json& d) { d["version"] = 0; }),
+             Catch::Contains("models.json: version: unsupported version 0"));
   CHECK_THAT(errorFor([](Json& d) { d["version"] = "1"; }), Catch::Contains("version"));
   CHECK_THAT(errorFor([](Json& d) { d.erase("version"); }), Catch::Contains("version: missing"));
-  // Version is checked before the rest: a v3 file with other fields is reported as v3.
+  // Version is checked before the rest: a v4 file with other fields is reported as v4.
   CHECK_THAT(errorFor([](Json& d) {
-               d["version"] = 3;
+               d["version"] = 4;
                d.erase("radial");
              }),
              Catch::Contains("unsupported version"));

@@ -60,6 +60,7 @@ Status validateModels(const SignalModels& models) {
   if (Status s = models.pipeline.validate(); !s.ok()) {
     return Error{"pipeline." + s.error().message};
   }
+  if (Status s = models.ramp.validate(); !s.ok()) return Error{"ramp." + s.error().message};
   return okStatus();
 }
 
@@ -87,7 +88,13 @@ OrderedJson pipelineJson(const PipelineOptions& p) {
             {"accept_dropped", d.accept_dropped}}},
           {"window", {{"samples", p.window.samples}, {"decimation", p.window.decimation}}},
           {"max_episode_samples", p.max_episode_samples},
-          {"max_held_fraction", p.max_held_fraction}};
+          {"max_held_fraction", p.max_held_fraction},
+          {"ramp",
+           {{"theta_low", p.ramp.theta_low},
+            {"theta_high", p.ramp.theta_high},
+            {"min_points", p.ramp.min_points},
+            {"min_span", p.ramp.min_span},
+            {"max_translation", p.ramp.max_translation}}}};
 }
 
 }  // namespace
@@ -126,7 +133,10 @@ std::string modelsToJson(const SignalModels& models) {
                              {"decimation", models.orientation.decimation},
                              {"columns", models.orientation.columns},
                              {"templates", std::move(templates)}}},
-                           {"pipeline", pipelineJson(models.pipeline)}};
+                           {"pipeline", pipelineJson(models.pipeline)},
+                           {"ramp",
+                            {{"gain", models.ramp.gain},
+                             {"compliance_scale", models.ramp.compliance_scale}}}};
   // Templates are long rows of numbers: no indentation keeps the file compact; nlohmann writes
   // doubles with enough digits to read back bit-exact.
   return doc.dump() + "\n";
@@ -209,9 +219,13 @@ OrientationModel parseOrientation(const Json& j) {
   return m;
 }
 
-PipelineOptions parsePipeline(const Json& j) {
+PipelineOptions parsePipeline(const Json& j, bool with_ramp) {
   const std::string path = "pipeline";
-  expectObject(j, path, {"detector", "window", "max_episode_samples", "max_held_fraction"});
+  if (with_ramp) {
+    expectObject(j, path, {"detector", "window", "max_episode_samples", "max_held_fraction", "ramp"});
+  } else {
+    expectObject(j, path, {"detector", "window", "max_episode_samples", "max_held_fraction"});
+  }
   PipelineOptions p;
   const std::string dp = "pipeline.detector";
   const Json& d = required(j, path, "detector");
@@ -253,7 +267,25 @@ PipelineOptions parsePipeline(const Json& j) {
   p.max_episode_samples = count(required(j, path, "max_episode_samples"),
                                 member(path, "max_episode_samples"), kMaxSamples);
   p.max_held_fraction = requiredNumber(j, path, "max_held_fraction");
+  if (with_ramp) {
+    const std::string rp = "pipeline.ramp";
+    const Json& r = required(j, path, "ramp");
+    expectObject(r, rp, {"theta_low", "theta_high", "min_points", "min_span", "max_translation"});
+    p.ramp.theta_low = requiredNumber(r, rp, "theta_low");
+    p.ramp.theta_high = requiredNumber(r, rp, "theta_high");
+    p.ramp.min_points = count(required(r, rp, "min_points"), member(rp, "min_points"), kMaxSamples);
+    p.ramp.min_span = requiredNumber(r, rp, "min_span");
+    p.ramp.max_translation = requiredNumber(r, rp, "max_translation");
+  }
   return p;
+}
+
+RampCalibration parseRampCalibration(const Json& j) {
+  expectObject(j, "ramp", {"gain", "compliance_scale"});
+  RampCalibration c;
+  c.gain = requiredNumber(j, "ramp", "gain");
+  c.compliance_scale = requiredNumber(j, "ramp", "compliance_scale");
+  return c;
 }
 
 // What a version-1 file's models were trained with (models_io.h).
@@ -271,21 +303,24 @@ SignalModels parseDocument(const Json& doc) {
   }
   // The version first: another version may lay out everything else differently.
   const Json& version = required(doc, "", "version");
-  if (!version.is_number_integer() ||
-      (version.get<std::int64_t>() != 1 && version.get<std::int64_t>() != kModelsVersion)) {
-    fail("version", "unsupported version " + version.dump() + " (this build reads versions 1 and " +
+  if (!version.is_number_integer() || version.get<std::int64_t>() < 1 ||
+      version.get<std::int64_t>() > kModelsVersion) {
+    fail("version", "unsupported version " + version.dump() + " (this build reads versions 1 to " +
                         std::to_string(kModelsVersion) + ")");
   }
-  const bool v1 = version.get<std::int64_t>() == 1;
-  if (v1) {
+  const std::int64_t v = version.get<std::int64_t>();
+  if (v == 1) {
     expectObject(doc, "", {"format", "version", "radial", "orientation"});
-  } else {
+  } else if (v == 2) {
     expectObject(doc, "", {"format", "version", "radial", "orientation", "pipeline"});
+  } else {
+    expectObject(doc, "", {"format", "version", "radial", "orientation", "pipeline", "ramp"});
   }
   SignalModels models;
   models.radial = parseRadial(required(doc, "", "radial"));
   models.orientation = parseOrientation(required(doc, "", "orientation"));
-  models.pipeline = v1 ? version1Pipeline() : parsePipeline(required(doc, "", "pipeline"));
+  models.pipeline = v == 1 ? version1Pipeline() : parsePipeline(required(doc, "", "pipeline"), v >= 3);
+  if (v >= 3) models.ramp = parseRampCalibration(required(doc, "", "ramp"));
   if (Status s = validateModels(models); !s.ok()) {
     const std::string& msg = s.error().message;
     const size_t colon = msg.find(": ");

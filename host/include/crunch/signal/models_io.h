@@ -15,11 +15,16 @@
 //                              "release_samples": n, "baseline_time_constant_s": ..,
 //                              "max_held_samples": n, "accept_dropped": bool},
 //                 "window": {"samples": n, "decimation": n},
-//                 "max_episode_samples": n, "max_held_fraction": ..}}
+//                 "max_episode_samples": n, "max_held_fraction": ..,
+//                 "ramp": {"theta_low": .., "theta_high": .., "min_points": n, "min_span": ..,
+//                          "max_translation": ..}},
+//    "ramp": {"gain": .., "compliance_scale": ..}}
 //
 // Version 1 files (no "pipeline") are still read: every one was written by `crunchhost train`
 // with the pipeline's defaults and an onset threshold of kVersion1OnsetThreshold, which is what
-// reading one gives. Files are written as version 2.
+// reading one gives. Version 2 files (no ramp settings, no "ramp" calibration) read with the
+// default RampOptions and the nominal RampCalibration (contact_ramp.h). Files are written as
+// version 3.
 //
 // Reading is strict: every field required, unknown keys refused, numbers finite, counts
 // non-negative integers, sizes as declared. Every failure is an Error "<file>: <field path>:
@@ -37,7 +42,7 @@
 namespace crunch::signal {
 
 inline constexpr const char* kModelsFormat = "crunchbot-signal-models";
-inline constexpr int kModelsVersion = 2;
+inline constexpr int kModelsVersion = 3;
 // The detector's onset threshold of every version-1 file's training rig (radians).
 inline constexpr double kVersion1OnsetThreshold = 0.008;
 
