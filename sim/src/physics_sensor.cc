@@ -126,24 +126,45 @@ void PhysicsSensorModel::score(std::uint32_t set) {
   const auto& truth = rig_->episodeTruth();
   for (std::size_t w = 0; w < mounts_.size(); ++w) {
     if (!(set & (1u << w))) continue;
-    const ContactReport& rep = rig_->chain().evidence().entry(static_cast<int>(w)).report;
-    const WhiskerTruth& t = truth[w];
     Score& sc = scores_[w];
     sc = Score{};
-    sc.scored = t.touched;
-    if (t.touched) {
-      const WhiskerMount& m = mounts_[w];
-      const Vec2 at = rep.robot.toWorld(m.base + rep.r * Vec2{std::cos(m.bearing),
-                                                              std::sin(m.bearing)});
-      sc.err_r = rep.r - t.r_at_touch;
-      sc.err_pos = (at - t.point_at_touch).norm();
-      sc.err_phi = wrapPeriod(rep.phi - (t.tangent_at_touch - rep.robot.theta), kPi);
-      sc.true_tip = t.r_at_touch >= m.length - rig_->chain().tipZone();
-      sc.on_leg = std::any_of(legs_.begin(), legs_.end(), [&](const OrientedRect& f) {
-        return closestOnPerimeter(f, t.point_at_touch).distance < 0.005;
-      });
-    }
+    sc.scored = truth[w].touched;
+    sc.truth = truth[w];
   }
+}
+
+void PhysicsSensorModel::tally(const ContactReport& rep) {
+  const Score& sc = scores_[static_cast<std::size_t>(rep.whisker)];
+  if (!sc.scored) {
+    ++errors_.unscored;
+    return;
+  }
+  const WhiskerTruth& t = sc.truth;
+  const WhiskerMount& m = mounts_[static_cast<std::size_t>(rep.whisker)];
+  const Vec2 at =
+      rep.robot.toWorld(m.base + rep.r * Vec2{std::cos(m.bearing), std::sin(m.bearing)});
+  const bool on_leg = std::any_of(legs_.begin(), legs_.end(), [&](const OrientedRect& f) {
+    return closestOnPerimeter(f, t.point_at_touch).distance < 0.005;
+  });
+  // A leg's contact is a point: the error is the distance to it. A wall's is a face along which
+  // a pressed tip slides before the sweep measures it: the error is the distance to the face.
+  const Vec2 along{std::cos(t.tangent_at_touch), std::sin(t.tangent_at_touch)};
+  const Vec2 off = at - t.point_at_touch;
+  const double err_pos = on_leg ? off.norm() : std::abs(off.x() * along.y() - off.y() * along.x());
+  const double err_r = rep.r - t.r_at_touch;
+  ++errors_.reports;
+  errors_.sum_r += err_r;
+  errors_.sum_r2 += err_r * err_r;
+  if (rep.oriented) {
+    const double err_phi = wrapPeriod(rep.phi - (t.tangent_at_touch - rep.robot.theta), kPi);
+    ++errors_.oriented;
+    errors_.sum_phi += err_phi;
+    errors_.sum_phi2 += err_phi * err_phi;
+  }
+  errors_.position_errors.push_back(err_pos);
+  (on_leg ? errors_.leg_position_errors : errors_.wall_position_errors).push_back(err_pos);
+  const double tip_from = m.length - rig_->chain().tipZone();
+  ++errors_.tip_confusion[t.r_at_touch >= tip_from ? 0 : 1][rep.r < tip_from ? 1 : 0];
 }
 
 void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
@@ -222,28 +243,9 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   errors_.no_radial = chain.evidence().counts().no_radial;
   errors_.no_orientation = chain.evidence().counts().no_orientation;
   errors_.no_ramp = chain.evidence().counts().no_ramp;
-  for (std::size_t k = first; k < out.size(); ++k) {
-    const ContactReport& rep = out[k];
-    const Score& sc = scores_[static_cast<std::size_t>(rep.whisker)];
-    if (sc.scored) {
-      ++errors_.reports;
-      errors_.sum_r += sc.err_r;
-      errors_.sum_r2 += sc.err_r * sc.err_r;
-      if (rep.oriented) {
-        ++errors_.oriented;
-        errors_.sum_phi += sc.err_phi;
-        errors_.sum_phi2 += sc.err_phi * sc.err_phi;
-      }
-      errors_.position_errors.push_back(sc.err_pos);
-      (sc.on_leg ? errors_.leg_position_errors : errors_.wall_position_errors)
-          .push_back(sc.err_pos);
-      const WhiskerMount& m = mounts_[static_cast<std::size_t>(rep.whisker)];
-      const bool reported_shaft = rep.r < m.length - rig_->chain().tipZone();
-      ++errors_.tip_confusion[sc.true_tip ? 0 : 1][reported_shaft ? 1 : 0];
-    } else {
-      ++errors_.unscored;
-    }
-  }
+  // Scored now, not when each episode ended: a report's class and face are settled at the
+  // whisk's end (WhiskEvidence::end).
+  for (std::size_t k = first; k < out.size(); ++k) tally(out[k]);
 }
 
 }  // namespace crunch::sim

@@ -65,8 +65,10 @@ struct ReportErrors {
   // "normal" is no truth. phi_hat - phi_true wrapped to [-pi/2, pi/2), radians.
   int oriented = 0;
   double sum_phi = 0.0, sum_phi2 = 0.0;
-  // Distance from each scored report's contact point to the true one, metres: all, and split by
+  // Distance from each scored report's contact point to the truth, metres: all, and split by
   // what was touched (a leg: a footprint no side of which is longer than 0.1 m; else a wall).
+  // For a leg, to the true point; for a wall, to the face through it (a pressed tip slides along
+  // a face before the sweep measures it: any point of the face is a true contact).
   std::vector<double> position_errors, leg_position_errors, wall_position_errors;
   // Tip or shaft (r in the models' tip zone), reported against true: [true shaft][reported shaft].
   int tip_confusion[2][2] = {{0, 0}, {0, 0}};
@@ -115,15 +117,17 @@ class PhysicsSensorModel final : public SensorModel {
  private:
   PhysicsSensorModel(const World& world, std::unique_ptr<WhiskerRig> rig,
                      std::vector<WhiskerMount> mounts, const Options& options);
-  // Scores the reports the episode just ended gave (bit w: whisker w's first report).
+  // Keeps the truth of the episode that just ended for the whiskers it gave their first report
+  // (bit w: whisker w).
   void score(std::uint32_t set);
 
   // A report's error against the truth, taken when the episode that set it ended.
   struct Score {
     bool scored = false;
-    double err_r = 0.0, err_phi = 0.0, err_pos = 0.0;
-    bool true_tip = false, on_leg = false;
+    WhiskerTruth truth;  // the truth of the episode that set the whisker's report
   };
+  // Adds one report's errors to errors_ (scores_ holds its whisker's truth).
+  void tally(const ContactReport& report);
 
   const World& world_;
   std::unique_ptr<WhiskerRig> rig_;
