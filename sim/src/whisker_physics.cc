@@ -346,13 +346,20 @@ void WhiskeredRobot::build() {
   contact_count_.assign(mounts_.size(), 0);
 }
 
-void WhiskeredRobot::resetWhiskers() {
+void WhiskeredRobot::clearContacts() {
   dJointGroupEmpty(contact_group_.get());
   contacts_.clear();
   std::fill(contact_count_.begin(), contact_count_.end(), 0);
+}
+
+void WhiskeredRobot::resetWhiskers() {
+  clearContacts();
 
   const double z = options_.z;
   setBaseBodies(0.0, 0.0, 0.0);
+  // The whiskers move rigidly with the base: at rest after place() (the wheels halted), turning
+  // with it when free-running ends mid-turn.
+  const double v = wheels_.v(), omega = wheels_.omega();
 
   for (size_t wi = 0; wi < mounts_.size(); ++wi) {
     const WhiskerMount& m = mounts_[wi];
@@ -367,8 +374,14 @@ void WhiskeredRobot::resetWhiskers() {
       const Vec2 c = base + (seg_start_[i] + 0.5 * seg_len_[i]) * u;
       dBodySetPosition(body, c.x(), c.y(), z);
       dBodySetRotation(body, R);
-      dBodySetLinearVel(body, 0.0, 0.0, 0.0);
-      dBodySetAngularVel(body, 0.0, 0.0, 0.0);
+      if (v == 0.0 && omega == 0.0) {
+        dBodySetLinearVel(body, 0.0, 0.0, 0.0);
+        dBodySetAngularVel(body, 0.0, 0.0, 0.0);
+      } else {  // rigid motion with the base: v along the heading plus omega x (c - centre)
+        dBodySetLinearVel(body, v * std::cos(pose_.theta) - omega * (c.y() - pose_.y),
+                          v * std::sin(pose_.theta) + omega * (c.x() - pose_.x), 0.0);
+        dBodySetAngularVel(body, 0.0, 0.0, omega);
+      }
     }
     // Re-attaching re-records the joints' rest configuration at the straight pose.
     for (size_t j = 0; j < wh.joints.size(); ++j) {
@@ -545,7 +558,27 @@ int WhiskeredRobot::substepsNeeded() const {
   return std::clamp(n, options_.substeps, options_.max_substeps);
 }
 
+void WhiskeredRobot::setFreeRunning(bool on) {
+  if (on == free_running_) return;
+  free_running_ = on;
+  if (on) {
+    clearContacts();
+  } else {
+    resetWhiskers();
+  }
+}
+
 void WhiskeredRobot::step() {
+  if (free_running_) {
+    // The base exactly as substep() moves it; no collision, no dynamics (see the header).
+    const double h = options_.dt / options_.substeps;
+    for (int i = 0; i < options_.substeps; ++i) {
+      moveBase(h);
+      time_ += h;
+    }
+    ++free_steps_;
+    return;
+  }
   const int n = substepsNeeded();
   if (n > options_.substeps) ++refined_steps_;
   const double h = options_.dt / n;
@@ -560,6 +593,7 @@ int WhiskeredRobot::run(double seconds) {
 
 BaseAngles WhiskeredRobot::baseAngles(int w) const {
   assert(w >= 0 && w < whiskerCount());
+  if (free_running_) return BaseAngles{};  // straight at rest on the base
   const dReal* R = dBodyGetRotation(whiskers_[static_cast<size_t>(w)].bodies[0].get());
   const double ux = R[2], uy = R[6], uz = R[10];  // local z: the first capsule's direction
   const double c = std::cos(pose_.theta), s = std::sin(pose_.theta);
@@ -610,6 +644,15 @@ Eigen::Vector3d WhiskeredRobot::basePoint(int w) const {
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> WhiskeredRobot::segmentEnds(int w, int i) const {
   assert(w >= 0 && w < whiskerCount() && i >= 0 && i < segmentCount());
+  if (free_running_) {  // the straight whisker on the base
+    const WhiskerMount& m = mounts_[static_cast<size_t>(w)];
+    const Vec2 base = pose_.toWorld(m.base);
+    const double a = pose_.theta + m.bearing;
+    const Vec2 u(std::cos(a), std::sin(a));
+    const Vec2 p0 = base + seg_start_[static_cast<size_t>(i)] * u;
+    const Vec2 p1 = p0 + seg_len_[static_cast<size_t>(i)] * u;
+    return {{p0.x(), p0.y(), options_.z}, {p1.x(), p1.y(), options_.z}};
+  }
   dBodyID body = whiskers_[static_cast<size_t>(w)].bodies[static_cast<size_t>(i)].get();
   const dReal* p = dBodyGetPosition(body);
   const dReal* R = dBodyGetRotation(body);

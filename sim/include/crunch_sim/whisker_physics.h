@@ -49,6 +49,14 @@
 //   - Stability: joint error correction 0.8 per step, a little constraint force mixing to keep
 //     the LCP regular, a cap on contact correction speed, and adaptive substeps when a capsule
 //     turns fast (Options::max_rotation_per_substep); docs/WHISKERS.md has the measurements.
+//   - Free-running (setFreeRunning): for stretches in which the caller has shown that no whisker
+//     can touch anything (PhysicsSensorModel's untouchable whisks, whisk_clearance.h), step()
+//     moves the base exactly as above — the same DiffDrive, bumper rule, substeps and time — but
+//     runs no collision and no dWorldStep: the whiskers are taken to be straight at rest on the
+//     base (baseAngles() exactly 0, no contacts). What this leaves out is only a free whisker's
+//     own ringing when the turn starts, reverses or stops (up to 5 mrad at the base in a body
+//     whisk at pi/24 rad/s; docs/WHISKERS.md, "Skipping untouchable whisks"), which ODE costs 90 %
+//     of the step to compute.
 //
 // Ownership: the robot owns every ODE handle it creates (unique_ptr with deleters) and holds a
 // reference to the World, which must outlive it. Non-copyable.
@@ -207,6 +215,20 @@ class WhiskeredRobot final : public MobileBase {
   // Steps until `seconds` more have passed (rounded to whole steps); returns the steps taken.
   int run(double seconds);
 
+  // Free-running on or off (see the top of this file). Only sound while no whisker can touch a
+  // wall or leg: the caller guarantees it (nothing here checks). Turning it on drops the current
+  // contacts and freezes the ODE whisker state; while on, step() integrates the base only
+  // (Options::substeps substeps, the same pose and time as with ODE: a free whisker never
+  // needs the adaptive refinement), baseAngles() are exactly {0, 0}, contact() is nullopt and
+  // segmentEnds() give the straight whisker. Turning it off puts every whisker straight on the
+  // base at the current pose, moving rigidly with it (the base's current v and omega), and the
+  // next step() is an ODE step again. Calling it with the current state does nothing. place()
+  // works in both states and keeps it. Allocates nothing.
+  void setFreeRunning(bool on);
+  bool freeRunning() const { return free_running_; }
+  // Steps taken free-running.
+  long long freeSteps() const { return free_steps_; }
+
   // The follicle's deflection of whisker w, from the direction of its first capsule relative to
   // its rest direction on the base. 0 <= w < whiskerCount().
   BaseAngles baseAngles(int w) const;
@@ -294,6 +316,7 @@ class WhiskeredRobot final : public MobileBase {
   WhiskeredRobot(const World& world, std::vector<WhiskerMount> mounts, const Options& options);
   void build();
   void resetWhiskers();
+  void clearContacts();
   void substep(double h);
   int substepsNeeded() const;
   void moveBase(double h);
@@ -331,6 +354,8 @@ class WhiskeredRobot final : public MobileBase {
   bool bumped_ = false;
   long long refused_steps_ = 0;
   long long refined_steps_ = 0;
+  bool free_running_ = false;
+  long long free_steps_ = 0;
   double last_h_ = 0.0;  // substep the joint springs were set for
   double contact_erp_ = 0.2, contact_cfm_ = 0.0;  // for last_h_
 };
