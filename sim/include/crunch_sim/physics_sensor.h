@@ -32,6 +32,25 @@
 // (Before issue 11 the physics path sampled only during the whisk, counted from its start;
 // docs/WHISKERS.md, "Physics path through the session", compares the two.)
 //
+// Untouchable whisks (Options::skip_untouchable, docs/WHISKERS.md "Skipping untouchable
+// whisks"): sense() alone decides, before each whisk, whether it may leave ODE out. If no
+// straight whisker comes within Options::skip_margin of a wall or leg at any heading of the
+// whisk, theta0 +- (A + kSkipHeadingSlack) (inPlaceWhiskClear, whisk_clearance.h), the whole
+// whisk and the wait after it run with the robot free-running (WhiskeredRobot::setFreeRunning):
+// the base turns exactly as with ODE (same DiffDrive integration, same steps, same time) and the
+// whiskers are straight at rest, base angles exactly 0; the Hall model (and its noise stream),
+// the boards, the bridge bytes, the chain and its free-ray sampling run unchanged, one 500 us
+// sample at a time. Why it is safe: a whisker that cannot reach anything can give no contact, so
+// ODE would compute only its free ringing at the turn's start, reversals and end (<= 5.2 mrad at
+// the base, 1.4 mm at the tip, measured), well under the contact detector's 8 mrad onset floor
+// (kPhysicsOnsetThreshold): no episode either way. What differs is those few-millirad
+// wiggles in the codes, which the detectors' slow rest tracking averages in, so the reports of
+// later whisks may move a little: on the default arena the same 147 reports at the same poses,
+// r within 1.6 um, phi within one sample's turn (65 urad), the free rays identical
+// (docs/WHISKERS.md; test/sim/physics_sensor_test.cc bounds it). If the heading ever left the
+// checked range, sense() would put the robot back on ODE at once (never seen: the whisk
+// overshoots its targets by at most one step's turn, 65 urad).
+//
 // Scoring: against the simulator's ground truth at the same peak (WhiskerTruth), the reports'
 // errors in r and phi are accumulated (errors()), for report.json's measured sigma_r, sigma_phi.
 //
@@ -69,11 +88,27 @@ struct ReportErrors {
   double sigmaPhi() const;     // root mean square error, radians
 };
 
+// Smallest Options::skip_margin: twice what a free whisker's straight rest line leaves out
+// (1.4 mm of tip ringing, 0.61 mm capsule radius; see Options::skip_margin), rounded up.
+inline constexpr double kMinSkipMargin = 0.005;
+// Headings beyond the whisk's +-A that the skip check covers as well, radians: a phase ends at
+// the first step past its target (65 urad at pi/24 rad/s), and a wheel ramp
+// (WhiskeredRobot::Options::max_wheel_acceleration) may carry the turn a few mrad further.
+inline constexpr double kSkipHeadingSlack = 0.01;
+
 class PhysicsSensorModel final : public SensorModel {
  public:
   struct Options {
     WhiskerRig::Options rig;  // must be the options the models were trained with
     double max_settle_s = 4.0;  // after the whisk, wait at most this for the episode to end
+    // Leave ODE out of whisks that cannot touch anything (see the top of this file). Off: every
+    // whisk in ODE, as before issue 12 (for comparing the two).
+    bool skip_untouchable = true;
+    // How far (metres) every straight whisker must stay from every wall and leg over the whisk
+    // for it to be skipped; in [kMinSkipMargin, 0.1]. It covers what a straight rest whisker
+    // leaves out of ODE's: the free ringing (tip <= 1.4 mm off straight), the capsule radius
+    // (<= 0.61 mm) and ODE's contact layer (0.01 mm); 10 mm is five times their sum.
+    double skip_margin = 0.01;
     Status validate() const;
   };
 
@@ -94,10 +129,12 @@ class PhysicsSensorModel final : public SensorModel {
 
   const ReportErrors& errors() const { return errors_; }
   const WhiskerRig& rig() const { return *rig_; }
+  // Whisks run free-running (without ODE) because they could not touch anything.
+  int skippedWhisks() const { return skipped_whisks_; }
 
  private:
-  PhysicsSensorModel(std::unique_ptr<WhiskerRig> rig, std::vector<WhiskerMount> mounts,
-                     const Options& options);
+  PhysicsSensorModel(const World& world, std::unique_ptr<WhiskerRig> rig,
+                     std::vector<WhiskerMount> mounts, const Options& options);
   // Scores the reports the episode just ended gave (bit w: whisker w's first report).
   void score(std::uint32_t set);
 
@@ -107,6 +144,7 @@ class PhysicsSensorModel final : public SensorModel {
     double err_r = 0.0, err_phi = 0.0;
   };
 
+  const World& world_;
   std::unique_ptr<WhiskerRig> rig_;
   std::vector<WhiskerMount> mounts_;
   Options options_;
@@ -114,6 +152,7 @@ class PhysicsSensorModel final : public SensorModel {
   std::vector<FreeRay> free_;
   ReportErrors errors_;
   Pose2 clear_pose_;  // where the rig calibrated: every whisker free
+  int skipped_whisks_ = 0;
 };
 
 // The options the shipped models were trained with (docs/TRAINING.md), with the Hall noise
