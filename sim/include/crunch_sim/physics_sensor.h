@@ -38,18 +38,15 @@
 // whisk, theta0 +- (A + kSkipHeadingSlack) (inPlaceWhiskClear, whisk_clearance.h), the whole
 // whisk and the wait after it run with the robot free-running (WhiskeredRobot::setFreeRunning):
 // the base turns exactly as with ODE (same DiffDrive integration, same steps, same time) and the
-// whiskers are straight at rest, base angles exactly 0; the Hall model (and its noise stream),
-// the boards, the bridge bytes, the chain and its free-ray sampling run unchanged, one 500 us
-// sample at a time. Why it is safe: a whisker that cannot reach anything can give no contact, so
-// ODE would compute only its free ringing at the turn's start, reversals and end (<= 5.2 mrad at
-// the base, 1.4 mm at the tip, measured), well under the contact detector's 8 mrad onset floor
-// (kPhysicsOnsetThreshold): no episode either way. What differs is those few-millirad
-// wiggles in the codes, which the detectors' slow rest tracking averages in, so the reports of
-// later whisks may move a little: on the default arena the same 147 reports at the same poses,
-// r within 1.6 um, phi within one sample's turn (65 urad), the free rays identical
-// (docs/WHISKERS.md; test/sim/physics_sensor_test.cc bounds it). If the heading ever left the
-// checked range, sense() would put the robot back on ODE at once (never seen: the whisk
-// overshoots its targets by at most one step's turn, 65 urad).
+// whiskers' base angles replay ODE's own free response to the whisk's turns (to 2e-13 rad); the
+// Hall model (and its noise stream), the boards, the bridge bytes, the chain and its free-ray
+// sampling run unchanged, one 500 us sample at a time. Why it is safe: a whisker that cannot
+// reach anything can give no contact, so ODE would compute only that free ringing (<= 5.2 mrad
+// at the base, 1.4 mm at the tip), which the margin covers with the capsules' radius. On the
+// default arena skipping 224 of its 320 whisks changes nothing sensed: the same 147 reports, r,
+// phi and poses bit for bit, the same free rays (test/sim/physics_sensor_test.cc checks a small
+// scene). If the heading ever left the checked range, sense() would put the robot back on ODE at
+// once (never seen: the whisk overshoots its targets by at most one step's turn, 65 urad).
 //
 // Scoring: against the simulator's ground truth at the same peak (WhiskerTruth), the reports'
 // errors in r and phi are accumulated (errors()), for report.json's measured sigma_r, sigma_phi.
@@ -88,7 +85,7 @@ struct ReportErrors {
   double sigmaPhi() const;     // root mean square error, radians
 };
 
-// Smallest Options::skip_margin: twice what a free whisker's straight rest line leaves out
+// Smallest Options::skip_margin: twice the reach of ODE's free whisker beyond the straight line
 // (1.4 mm of tip ringing, 0.61 mm capsule radius; see Options::skip_margin), rounded up.
 inline constexpr double kMinSkipMargin = 0.005;
 // Headings beyond the whisk's +-A that the skip check covers as well, radians: a phase ends at
@@ -105,9 +102,9 @@ class PhysicsSensorModel final : public SensorModel {
     // whisk in ODE, as before issue 12 (for comparing the two).
     bool skip_untouchable = true;
     // How far (metres) every straight whisker must stay from every wall and leg over the whisk
-    // for it to be skipped; in [kMinSkipMargin, 0.1]. It covers what a straight rest whisker
-    // leaves out of ODE's: the free ringing (tip <= 1.4 mm off straight), the capsule radius
-    // (<= 0.61 mm) and ODE's contact layer (0.01 mm); 10 mm is five times their sum.
+    // for it to be skipped; in [kMinSkipMargin, 0.1]. It covers where ODE's free whisker may be
+    // beyond the straight line checked: its ringing (tip <= 1.4 mm off straight), the capsule
+    // radius (<= 0.61 mm) and ODE's contact layer (0.01 mm); 10 mm is five times their sum.
     double skip_margin = 0.01;
     Status validate() const;
   };
