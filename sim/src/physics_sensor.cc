@@ -7,6 +7,7 @@
 
 #include "crunch/behaviour/body_whisk.h"
 #include "crunch_sim/training.h"
+#include "crunch_sim/whisk_clearance.h"
 
 namespace crunch::sim {
 
@@ -78,6 +79,10 @@ Status PhysicsSensorModel::Options::validate() const {
   if (auto s = rig.validate(); !s) return s;
   if (!(std::isfinite(max_settle_s) && max_settle_s > 0.0)) {
     return Error{"physics sensor: max_settle_s must be positive"};
+  }
+  if (!(std::isfinite(skip_margin) && skip_margin >= kMinSkipMargin && skip_margin <= 0.1)) {
+    return Error{"physics sensor: skip_margin must be in [" + std::to_string(kMinSkipMargin) +
+                 ", 0.1] m (got " + std::to_string(skip_margin) + ")"};
   }
   return okStatus();
 }
@@ -205,6 +210,13 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   wopt.whisker_bearings.clear();
   for (const WhiskerMount& m : mounts_) wopt.whisker_bearings.push_back(m.bearing);
   BodyWhisk whisk(robot, wopt);
+  // Untouchable whisks: the whole whisk and the wait after it without ODE (see the header).
+  const double checked = wopt.whisk_amplitude + kSkipHeadingSlack;  // each way from theta0
+  const bool skip = options_.skip_untouchable &&
+                    inPlaceWhiskClear(world_, mounts_, pose, -checked, checked,
+                                      options_.skip_margin);
+  if (skip) ++skipped_whisks_;
+  robot.setFreeRunning(skip);
   // As the robot's control loop marks it: the whisk's episodes are the ones reported.
   chain.beginWhisk();
   (void)whisk.startInPlace(+1);  // the ray model's sweep: toward +A first
@@ -219,6 +231,9 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   for (long n = 0; n < max_steps; ++n) {
     const std::uint32_t before = chain.reportedMask();
     if (rig_->step() != nullptr) score(chain.reportedMask() & ~before);
+    if (robot.freeRunning() && std::abs(robot.odometry().theta - pose.theta) > checked) {
+      robot.setFreeRunning(false);  // outside what was checked: ODE again (never seen)
+    }
     if (whisking) {
       (void)whisk.update(rig_->contactMask());
       if (whisk.done()) {
@@ -230,6 +245,7 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
     }
   }
   (void)robot.stop();
+  robot.setFreeRunning(false);
   {
     const std::uint32_t before = chain.reportedMask();
     if (rig_->finish() != nullptr) score(chain.reportedMask() & ~before);

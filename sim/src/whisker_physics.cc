@@ -10,6 +10,8 @@
 #include <string>
 #include <utility>
 
+#include "crunch/scene/scene.h"
+
 namespace crunch::sim {
 namespace {
 
@@ -162,7 +164,8 @@ WhiskeredRobot::WhiskeredRobot(const World& world, std::vector<WhiskerMount> mou
       mounts_(std::move(mounts)),
       options_(options),
       wheels_(DiffDrive::Options{options.wheel_base, options.max_wheel_speed,
-                                 options.max_wheel_acceleration}) {}
+                                 options.max_wheel_acceleration}),
+      response_steps_(std::max(1L, std::lround(kFreeResponseTime / options.dt))) {}
 
 WhiskeredRobot::~WhiskeredRobot() {
   // Contact joints reference the bodies; empty the group while everything still exists.
@@ -261,15 +264,23 @@ void WhiskeredRobot::build() {
   contacts_.reserve(mounts_.size() * static_cast<size_t>(segs) *
                     static_cast<size_t>(options_.max_contacts_per_segment) * 2);
   contact_count_.assign(mounts_.size(), 0);
+  free_angles_.assign(mounts_.size(), BaseAngles{});
 }
 
-void WhiskeredRobot::resetWhiskers() {
+void WhiskeredRobot::clearContacts() {
   dJointGroupEmpty(contact_group_.get());
   contacts_.clear();
   std::fill(contact_count_.begin(), contact_count_.end(), 0);
+}
+
+void WhiskeredRobot::resetWhiskers() {
+  clearContacts();
 
   const double z = options_.z;
   setBaseBodies(0.0, 0.0, 0.0);
+  // The whiskers move rigidly with the base: at rest after place() (the wheels halted), turning
+  // with it when free-running ends mid-turn.
+  const double v = wheels_.v(), omega = wheels_.omega();
 
   for (size_t wi = 0; wi < mounts_.size(); ++wi) {
     const WhiskerMount& m = mounts_[wi];
@@ -284,8 +295,14 @@ void WhiskeredRobot::resetWhiskers() {
       const Vec2 c = base + (seg_start_[i] + 0.5 * seg_len_[i]) * u;
       dBodySetPosition(body, c.x(), c.y(), z);
       dBodySetRotation(body, R);
-      dBodySetLinearVel(body, 0.0, 0.0, 0.0);
-      dBodySetAngularVel(body, 0.0, 0.0, 0.0);
+      if (v == 0.0 && omega == 0.0) {
+        dBodySetLinearVel(body, 0.0, 0.0, 0.0);
+        dBodySetAngularVel(body, 0.0, 0.0, 0.0);
+      } else {  // rigid motion with the base: v along the heading plus omega x (c - centre)
+        dBodySetLinearVel(body, v * std::cos(pose_.theta) - omega * (c.y() - pose_.y),
+                          v * std::sin(pose_.theta) + omega * (c.x() - pose_.x), 0.0);
+        dBodySetAngularVel(body, 0.0, 0.0, omega);
+      }
     }
     // Re-attaching re-records the joints' rest configuration at the straight pose.
     for (size_t j = 0; j < wh.joints.size(); ++j) {
@@ -309,10 +326,17 @@ void WhiskeredRobot::place(const Pose2& pose) {
   wheels_.halt();
   resetWhiskers();
   bumped_ = world_.bodyCollides(pose_);
+  // Straight at rest with the wheels stopped: the settled state of the zero command.
+  command_ = stepped_ = Command{};
+  since_change_ = response_steps_;
+  replay_ = nullptr;
+  for (int w = 0; w < whiskerCount(); ++w) free_angles_[static_cast<size_t>(w)] = odeBaseAngles(w);
 }
 
 Status WhiskeredRobot::drive(double v, double omega) {
-  return wheels_.command(v, omega, "simulated base (WhiskeredRobot)");
+  Status s = wheels_.command(v, omega, "simulated base (WhiskeredRobot)");
+  command_ = s.ok() ? Command{v, omega} : Command{};  // a bad command stops the wheels
+  return s;
 }
 
 double WhiskeredRobot::clearance(const Pose2& p) const {
@@ -462,11 +486,92 @@ int WhiskeredRobot::substepsNeeded() const {
   return std::clamp(n, options_.substeps, options_.max_substeps);
 }
 
+void WhiskeredRobot::setFreeRunning(bool on) {
+  if (on == free_running_) return;
+  free_running_ = on;
+  if (on) {
+    clearContacts();
+    // Hold the angles ODE has now: the settled value of the current command if the whiskers have
+    // settled (since_change_ saturated), else a ringing whisker frozen mid-swing (counted).
+    for (int w = 0; w < whiskerCount(); ++w) {
+      free_angles_[static_cast<size_t>(w)] = odeBaseAngles(w);
+    }
+    replay_ = nullptr;
+    if (since_change_ < response_steps_) ++inexact_free_changes_;
+  } else {
+    resetWhiskers();
+  }
+}
+
+const WhiskeredRobot::FreeResponse& WhiskeredRobot::freeResponse(const Command& from,
+                                                                 const Command& to) {
+  for (const FreeResponse& r : free_responses_) {
+    if (r.from == from && r.to == to) return r;
+  }
+  if (!probe_) {
+    // An empty arena large enough for the probe to drive two response times at full speed.
+    Scene empty;
+    empty.width = empty.depth = 20.0;
+    probe_world_ = World::build(empty);
+    auto made = create(*probe_world_, mounts_, options_);
+    assert(made.ok());  // the options and mounts this robot was made with
+    probe_ = std::move(made).value();
+  }
+  WhiskeredRobot& probe = *probe_;
+  if (probe_settled_ != from) {
+    // Start straight at rest in the middle and run `from` long enough to settle.
+    probe.place({10.0, 10.0, 0.0});
+    if (from != Command{}) {
+      (void)probe.drive(from.v, from.omega);
+      for (long i = 0; i < response_steps_; ++i) probe.step();
+    }
+  }
+  FreeResponse r;
+  r.from = from;
+  r.to = to;
+  r.angles.reserve(static_cast<size_t>(response_steps_) * mounts_.size());
+  (void)probe.drive(to.v, to.omega);
+  for (long i = 0; i < response_steps_; ++i) {
+    probe.step();
+    for (int w = 0; w < whiskerCount(); ++w) r.angles.push_back(probe.baseAngles(w));
+  }
+  probe_settled_ = to;
+  free_responses_.push_back(std::move(r));
+  return free_responses_.back();
+}
+
+void WhiskeredRobot::freeStep() {
+  // The base exactly as substep() moves it; no collision, no dynamics (see the header).
+  if (!(command_ == stepped_)) {
+    if (since_change_ < response_steps_) ++inexact_free_changes_;
+    replay_ = &freeResponse(stepped_, command_);
+    since_change_ = 0;
+  }
+  const double h = options_.dt / options_.substeps;
+  for (int i = 0; i < options_.substeps; ++i) {
+    moveBase(h);
+    time_ += h;
+  }
+  if (replay_ != nullptr) {
+    const long i = std::min(since_change_, response_steps_ - 1);  // then hold the settled value
+    const BaseAngles* row = &replay_->angles[static_cast<size_t>(i) * mounts_.size()];
+    std::copy(row, row + mounts_.size(), free_angles_.begin());
+  }
+  ++free_steps_;
+}
+
 void WhiskeredRobot::step() {
-  const int n = substepsNeeded();
-  if (n > options_.substeps) ++refined_steps_;
-  const double h = options_.dt / n;
-  for (int i = 0; i < n; ++i) substep(h);
+  if (free_running_) {
+    freeStep();
+  } else {
+    if (!(command_ == stepped_)) since_change_ = 0;
+    const int n = substepsNeeded();
+    if (n > options_.substeps) ++refined_steps_;
+    const double h = options_.dt / n;
+    for (int i = 0; i < n; ++i) substep(h);
+  }
+  stepped_ = command_;
+  since_change_ = std::min(since_change_ + 1, response_steps_);
 }
 
 int WhiskeredRobot::run(double seconds) {
@@ -477,6 +582,10 @@ int WhiskeredRobot::run(double seconds) {
 
 BaseAngles WhiskeredRobot::baseAngles(int w) const {
   assert(w >= 0 && w < whiskerCount());
+  return free_running_ ? free_angles_[static_cast<size_t>(w)] : odeBaseAngles(w);
+}
+
+BaseAngles WhiskeredRobot::odeBaseAngles(int w) const {
   const dReal* R = dBodyGetRotation(whiskers_[static_cast<size_t>(w)].bodies[0].get());
   const double ux = R[2], uy = R[6], uz = R[10];  // local z: the first capsule's direction
   const double c = std::cos(pose_.theta), s = std::sin(pose_.theta);
@@ -527,6 +636,15 @@ Eigen::Vector3d WhiskeredRobot::basePoint(int w) const {
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> WhiskeredRobot::segmentEnds(int w, int i) const {
   assert(w >= 0 && w < whiskerCount() && i >= 0 && i < segmentCount());
+  if (free_running_) {  // the straight whisker on the base
+    const WhiskerMount& m = mounts_[static_cast<size_t>(w)];
+    const Vec2 base = pose_.toWorld(m.base);
+    const double a = pose_.theta + m.bearing;
+    const Vec2 u(std::cos(a), std::sin(a));
+    const Vec2 p0 = base + seg_start_[static_cast<size_t>(i)] * u;
+    const Vec2 p1 = p0 + seg_len_[static_cast<size_t>(i)] * u;
+    return {{p0.x(), p0.y(), options_.z}, {p1.x(), p1.y(), options_.z}};
+  }
   dBodyID body = whiskers_[static_cast<size_t>(w)].bodies[static_cast<size_t>(i)].get();
   const dReal* p = dBodyGetPosition(body);
   const dReal* R = dBodyGetRotation(body);

@@ -50,6 +50,21 @@
 //   - Stability: joint error correction 0.8 per step, a little constraint force mixing to keep
 //     the LCP regular, a cap on contact correction speed, and adaptive substeps when a capsule
 //     turns fast (Options::max_rotation_per_substep); docs/WHISKERS.md has the measurements.
+//   - Free-running (setFreeRunning): for stretches in which the caller has shown that no whisker
+//     can touch anything (PhysicsSensorModel's untouchable whisks, whisk_clearance.h), step()
+//     moves the base exactly as above — the same DiffDrive, bumper rule, substeps and time — but
+//     runs no collision and no dWorldStep, which are 90 % of a step's cost. A free whisker's
+//     motion depends only on how its base moves: it rings when the drive command changes (up
+//     to 5.2 mrad at the base when a pi/24 rad/s whisk reverses) and settles, to within 3e-14
+//     rad, in kFreeResponseTime. So baseAngles() replay ODE's own response to each change,
+//     recorded once per distinct (previous command, new command) on a probe robot of the same
+//     build standing in an empty world, and hold its settled value after kFreeResponseTime.
+//     Against ODE through a body whisk at other poses the replay is within 2e-13 rad (2e-9 of a
+//     Hall code), so the sensed codes are the same. It is exact only when the whiskers had
+//     settled when free-running began and each change comes at least kFreeResponseTime after
+//     the one before (so with max_wheel_acceleration, only if a ramp and its ringing end within
+//     that time); other cases replay all the same and are counted (inexactFreeChanges()).
+//     segmentEnds() give the straight whisker (the ringing moves the tip by <= 1.4 mm).
 //
 // Ownership: the robot owns every ODE handle it creates (unique_ptr with deleters) and holds a
 // reference to the World, which must outlive it. Non-copyable.
@@ -57,10 +72,13 @@
 // global, so every World and WhiskeredRobot must be used from one thread at a time.
 // Allocation: construction and place() allocate; step() does not after its first few calls
 // (the contact buffer is sized at construction, ODE reuses its contact-joint arena and step
-// memory once they have grown to the largest contact set seen).
+// memory once they have grown to the largest contact set seen), except that a free-running
+// step() at a change of command not seen before records its free response (the probe robot,
+// once, and about 230 kB per change with four whiskers).
 #pragma once
 
 #include <Eigen/Core>
+#include <deque>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -157,6 +175,29 @@ class WhiskeredRobot final : public MobileBase {
   // Steps until `seconds` more have passed (rounded to whole steps); returns the steps taken.
   int run(double seconds);
 
+  // Free-running on or off (see the top of this file). Only sound while no whisker can touch a
+  // wall or leg: the caller guarantees it (nothing here checks). Turning it on drops the current
+  // contacts and freezes the ODE whisker state; while on, step() integrates the base only
+  // (Options::substeps substeps, the same pose and time as with ODE: a free whisker never needs
+  // the adaptive refinement), baseAngles() replay the free whiskers' response to the commands
+  // (the first change of command may run the probe robot for kFreeResponseTime of simulated time,
+  // allocating), contact() is nullopt and segmentEnds() give the straight whisker. Turning it off
+  // puts every whisker straight on the base at the current pose, moving rigidly with it (the
+  // base's current v and omega), and the next step() is an ODE step again. Calling it with the
+  // current state does nothing. place() works in both states and keeps it.
+  void setFreeRunning(bool on);
+  bool freeRunning() const { return free_running_; }
+  // Steps taken free-running.
+  long long freeSteps() const { return free_steps_; }
+  // Changes of command while free-running, and starts of free-running, that came within
+  // kFreeResponseTime of the change before (the whiskers still rang): replayed as if settled.
+  long long inexactFreeChanges() const { return inexact_free_changes_; }
+  // Distinct changes of command whose free response has been recorded on the probe robot.
+  int recordedFreeResponses() const { return static_cast<int>(free_responses_.size()); }
+  // How long a free whisker rings after a change of command before it is taken as settled,
+  // seconds (docs/WHISKERS.md, "Skipping untouchable whisks": 3e-14 rad left after 1.5 s).
+  static constexpr double kFreeResponseTime = 1.8;
+
   // The follicle's deflection of whisker w, from the direction of its first capsule relative to
   // its rest direction on the base. 0 <= w < whiskerCount().
   BaseAngles baseAngles(int w) const;
@@ -243,7 +284,23 @@ class WhiskeredRobot final : public MobileBase {
 
   WhiskeredRobot(const World& world, std::vector<WhiskerMount> mounts, const Options& options);
   void build();
+  // A drive() command, as given (the key of a recorded free response).
+  struct Command {
+    double v = 0.0, omega = 0.0;
+    bool operator==(const Command&) const = default;
+  };
+  // ODE's base angles of every free whisker over the kFreeResponseTime after `from` -> `to`.
+  struct FreeResponse {
+    Command from, to;
+    std::vector<BaseAngles> angles;  // step-major: angles[i * whiskers + w], i = 0 the first step
+  };
+
   void resetWhiskers();
+  void clearContacts();
+  BaseAngles odeBaseAngles(int w) const;
+  // The response to from -> to, recorded on the probe robot the first time it is asked for.
+  const FreeResponse& freeResponse(const Command& from, const Command& to);
+  void freeStep();
   void substep(double h);
   int substepsNeeded() const;
   void moveBase(double h);
@@ -281,6 +338,22 @@ class WhiskeredRobot final : public MobileBase {
   bool bumped_ = false;
   long long refused_steps_ = 0;
   long long refined_steps_ = 0;
+  // Free-running (see the top of this file).
+  bool free_running_ = false;
+  long long free_steps_ = 0;
+  long long inexact_free_changes_ = 0;
+  Command command_;             // the last drive() command (zero after place() or a bad one)
+  Command stepped_;             // the command the last step ran with
+  long since_change_ = 0;       // steps since stepped_ changed or place(), up to response_steps_
+  long response_steps_ = 0;     // kFreeResponseTime in steps
+  std::deque<FreeResponse> free_responses_;  // a deque: replay_ stays valid as it grows
+  const FreeResponse* replay_ = nullptr;  // being replayed, or null: hold free_angles_
+  std::vector<BaseAngles> free_angles_;   // per whisker: baseAngles() while free-running
+  // The probe: this robot's twin in an empty world, where free responses are recorded. Declared
+  // world first, so that the robot goes first.
+  std::unique_ptr<World> probe_world_;
+  std::unique_ptr<WhiskeredRobot> probe_;
+  std::optional<Command> probe_settled_;  // the command the probe has run long enough to settle
   double last_h_ = 0.0;  // substep the joint springs were set for
   double contact_erp_ = 0.2, contact_cfm_ = 0.0;  // for last_h_
 };
