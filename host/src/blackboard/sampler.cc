@@ -186,26 +186,42 @@ Pose2 Sampler::legAtPoint(const Shapelet& s) {
 }
 
 double Sampler::axisFromLegs(const Vec2& c, int32_t self, double fallback) {
-  // Another leg at a table side's or diagonal's distance from c gives the table's axes (modulo
-  // pi/2) as a table would hold both; each such leg is equally likely to be chosen.
+  // Another leg, or a point contact, at a table side's or diagonal's distance from c gives the
+  // table's axes (modulo pi/2) as a table would hold both; each such partner is equally likely
+  // to be chosen. Point contacts count as well as legs: they are there before their legs are.
   const ModelParams& p = bb_.params();
   const double w = p.table_width - p.leg_side, d = p.table_depth - p.leg_side;
   const double diag = std::hypot(w, d), diag_angle = std::atan2(d, w);
   const double tol = 2.0 * p.leg_side;
   double axis = fallback;
   int seen = 0;
-  bb_.legsNear(c, diag + tol, [&](int32_t o) {
-    const LegHyp& l = bb_.leg(o);
-    if (o == self || !l.alive) return;
-    const Vec2 v = l.pose.position() - c;
+  const auto consider = [&](const Vec2& other) {
+    const Vec2 v = other - c;
     const double len = v.norm(), dir = std::atan2(v.y(), v.x());
     double a;
     if (std::abs(len - w) < tol || std::abs(len - d) < tol) a = dir;
     else if (std::abs(len - diag) < tol) a = dir + (rng_.uniform() < 0.5 ? -diag_angle : diag_angle);
     else return;
     if (rng_.uniform() * ++seen < 1.0) axis = a;
+  };
+  bb_.legsNear(c, diag + tol, [&](int32_t o) {
+    const LegHyp& l = bb_.leg(o);
+    if (o != self && l.alive) consider(l.pose.position());
+  });
+  bb_.shapeletsWithin(c, diag + tol, [&](int32_t slot) {
+    const Shapelet& sh = bb_.shapelet(slot);
+    if (!sh.oriented) consider({sh.x, sh.y});
   });
   return axis;
+}
+
+bool Sampler::pointNear(const Vec2& c, double radius) const {
+  bool found = false;
+  bb_.shapeletsWithin(c, radius, [&](int32_t slot) {
+    const Shapelet& sh = bb_.shapelet(slot);
+    if (!sh.oriented && (Vec2{sh.x, sh.y} - c).squaredNorm() <= radius * radius) found = true;
+  });
+  return found;
 }
 
 bool Sampler::pointSupported(const Vec2& c) const {
@@ -383,6 +399,9 @@ void Sampler::proposeParent(int32_t leg, double beta) {
               (ol.pose.position() - corner).squaredNorm() <= std::pow(p.cornerLinkRadius(), 2))
             w += opt_.smart_parent_gain;
         });
+        // A point contact on a leg at that corner (within a leg's half-diagonal of it) counts
+        // as that leg would: it is the evidence a leg there will explain.
+        if (free_turn && pointNear(corner, p.cornerLinkRadius())) w += opt_.smart_parent_gain;
       }
     }
     weight[static_cast<size_t>(k)] = w;

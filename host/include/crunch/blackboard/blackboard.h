@@ -108,6 +108,11 @@ class Blackboard {
   void legsNear(const Vec2& c, double radius, F&& f) const {
     leg_hash_.query(c, radius, [&](int32_t id) { f(id); });
   }
+  // Working-memory slots whose shapelet may lie within `radius` of c (a superset: check).
+  template <typename F>
+  void shapeletsWithin(const Vec2& c, double radius, F&& f) const {
+    shapelet_hash_.query(c, radius, [&](int32_t slot) { f(slot); });
+  }
 
   // The footprint of a table hypothesis and of a leg (for overlap, eq. 25).
   OrientedRect tableRect(const Pose2& pose) const { return {pose, p_.table_width, p_.table_depth}; }

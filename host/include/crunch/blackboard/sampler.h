@@ -110,6 +110,8 @@ class Sampler {
   double axisFromLegs(const Vec2& c, int32_t self, double fallback);
   // Shapelets lie near c and none is oriented (ContactReport::oriented).
   bool pointSupported(const Vec2& c) const;
+  // A point (unoriented) shapelet lies within radius of c.
+  bool pointNear(const Vec2& c, double radius) const;
   // Proposes a new leg at `pose` under `parent` (or kNone); the birth moves of priming and of
   // Q(ch(T)) share it.
   void proposeLegBirth(const Pose2& pose, int32_t parent, double beta);
