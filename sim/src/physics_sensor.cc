@@ -146,8 +146,7 @@ void PhysicsSensorModel::tally(const ContactReport& rep) {
   }
   const WhiskerTruth& t = sc.truth;
   const WhiskerMount& m = mounts_[static_cast<std::size_t>(rep.whisker)];
-  const Vec2 at =
-      rep.robot.toWorld(m.base + rep.r * Vec2{std::cos(m.bearing), std::sin(m.bearing)});
+  const Vec2 at = m.pointAt(rep.robot, rep.r);
   const bool on_leg = std::any_of(legs_.begin(), legs_.end(), [&](const OrientedRect& f) {
     return closestOnPerimeter(f, t.point_at_touch).distance < 0.005;
   });

@@ -1,8 +1,14 @@
 #include "crunch/core/geometry.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
 
 using namespace crunch;
+
+namespace {
+bool near(double a, double b, double tol = 1e-12) { return std::abs(a - b) <= tol; }
+}  // namespace
 
 TEST_CASE("Geometry: wrapPeriod folds angles into the half-open period", "[core]") {
   CHECK(wrapPi(3 * kPi) == Approx(-kPi));
@@ -34,4 +40,24 @@ TEST_CASE("Geometry: distance from rectangle to segment", "[core]") {
   CHECK(distanceRectSegment(a, {1.0, -1.0}, {1.0, 1.0}) == Approx(0.5));
   CHECK(distanceRectSegment(a, {-1.0, 0.0}, {1.0, 0.0}) == Approx(0.0));
   CHECK(distanceRectSegment(a, {0.1, 0.1}, {0.2, 0.2}) == Approx(0.0));
+}
+
+TEST_CASE("Geometry: wrapHalfTurn maps any angle to 0 <= a < pi", "[core]") {
+  CHECK(wrapHalfTurn(0.0) == 0.0);
+  CHECK(near(wrapHalfTurn(kPi), 0.0));
+  CHECK(near(wrapHalfTurn(-0.1), kPi - 0.1));
+  CHECK(near(wrapHalfTurn(2.0 * kPi + 0.2), 0.2, 1e-9));
+  CHECK(near(wrapHalfTurn(kPi + 0.3), 0.3, 1e-12));
+  CHECK(near(wrapHalfTurn(-3.0 * kPi + 1.0), 1.0, 1e-9));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-40.0, 40.0);
+  for (int i = 0; i < 10000; ++i) {
+    const double a = u(rng);
+    const double h = wrapHalfTurn(a);
+    REQUIRE(h >= 0.0);
+    REQUIRE(h < kPi);
+    // Same orientation modulo pi.
+    const double k = std::round((a - h) / kPi);
+    REQUIRE(near(a - h, k * kPi, 1e-9));
+  }
 }

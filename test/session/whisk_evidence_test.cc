@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <random>
 #include <vector>
 
 using namespace crunch;
@@ -70,26 +69,6 @@ signal::ContactEpisode episode(std::uint64_t start, double angle, bool has_orien
 bool near(double a, double b, double tol = 1e-12) { return std::abs(a - b) <= tol; }
 
 }  // namespace
-
-TEST_CASE("WhiskEvidence: halfTurn maps any angle to 0 <= a < pi", "[mapping][evidence]") {
-  CHECK(halfTurn(0.0) == 0.0);
-  CHECK(near(halfTurn(kPi), 0.0));
-  CHECK(near(halfTurn(-0.1), kPi - 0.1));
-  CHECK(near(halfTurn(2.0 * kPi + 0.2), 0.2, 1e-9));
-  CHECK(near(halfTurn(kPi + 0.3), 0.3, 1e-12));
-  CHECK(near(halfTurn(-3.0 * kPi + 1.0), 1.0, 1e-9));
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(-40.0, 40.0);
-  for (int i = 0; i < 10000; ++i) {
-    const double a = u(rng);
-    const double h = halfTurn(a);
-    REQUIRE(h >= 0.0);
-    REQUIRE(h < kPi);
-    // Same orientation modulo pi.
-    const double k = std::round((a - h) / kPi);
-    REQUIRE(near(a - h, k * kPi, 1e-9));
-  }
-}
 
 TEST_CASE("WhiskEvidence: each whisker reports once per whisk, from its first episode",
           "[mapping][evidence]") {

@@ -225,15 +225,13 @@ bool Sampler::pointNear(const Vec2& c, double radius) const {
 }
 
 bool Sampler::pointSupported(const Vec2& c) const {
-  // Shapelets near c, none of them oriented: a leg that only point contacts support, whose
+  // Shapelets within the link radius of c (shapeletsNear), none of them oriented: a leg that only point contacts support, whose
   // orientation nothing but its table constrains.
   IdSet<64> near;
   bb_.shapeletsNear(c, near);
   bool any = false;
   for (int32_t o : near.span()) {
-    const Shapelet& sh = bb_.shapelet(o);
-    if ((Vec2{sh.x, sh.y} - c).norm() > bb_.params().shapeletLinkRadius()) continue;
-    if (sh.oriented) return false;
+    if (bb_.shapelet(o).oriented) return false;
     any = true;
   }
   return any;

@@ -24,8 +24,7 @@ bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mount
   if (rep.r < -m.length || rep.r > 2.0 * m.length) return false;
   const double r = std::clamp(rep.r, 0.0, m.length);
 
-  const Vec2 along(std::cos(m.bearing), std::sin(m.bearing));
-  const Vec2 contact = rep.robot.toWorld(m.base + r * along);
+  const Vec2 contact = m.pointAt(rep.robot, r);
   const Vec2 origin = rep.robot.toWorld(m.base);
 
   out.x = contact.x();

@@ -6,13 +6,6 @@
 
 namespace crunch {
 
-double halfTurn(double a) {
-  double w = wrapPeriod(a, kPi);
-  if (w < 0.0) w += kPi;
-  if (w >= kPi) w -= kPi;
-  return w;
-}
-
 WhiskEvidence::WhiskEvidence(std::vector<WhiskerMount> mounts, WhiskerBeam beam)
     : mounts_(std::move(mounts)), beam_(beam), entries_(mounts_.size()) {}
 
@@ -40,7 +33,7 @@ void WhiskEvidence::fill(Entry& e, std::size_t w, const signal::ContactEpisode& 
   e.located = c.ramp.valid;
   if (e.located) {
     // The touch: the straight rest whisker at the ramp's touch heading passes through the point.
-    const double lever = m.base.dot(Vec2{std::cos(m.bearing), std::sin(m.bearing)});
+    const double lever = m.base.dot(m.direction());
     e.report.r = std::min(distanceFromRampSlope(beam_, c.ramp.slope, lever, calibration_.gain,
                                                 calibration_.compliance_scale),
                           m.length);
@@ -53,7 +46,7 @@ void WhiskEvidence::fill(Entry& e, std::size_t w, const signal::ContactEpisode& 
   // A point until classifyFaces() finds the face. The template's angle is relative to the
   // heading at the first contact (the window's alignment, §2.5), the report to its own pose.
   e.report.oriented = false;
-  e.report.phi = halfTurn(ep.orientation.angle + onset.theta - e.report.robot.theta);
+  e.report.phi = wrapHalfTurn(ep.orientation.angle + onset.theta - e.report.robot.theta);
 }
 
 void WhiskEvidence::classifyFaces() {
@@ -65,16 +58,12 @@ void WhiskEvidence::classifyFaces() {
       if (!(b.have && b.located && b.tip)) continue;
       ContactReport& ra = a.report;
       ContactReport& rb = b.report;
-      const auto point = [this](const ContactReport& r) {
-        const WhiskerMount& m = mounts_[static_cast<std::size_t>(r.whisker)];
-        return r.robot.toWorld(m.base + r.r * Vec2{std::cos(m.bearing), std::sin(m.bearing)});
-      };
-      const Vec2 d = point(rb) - point(ra);
+      const Vec2 d = mounts_[j].pointAt(rb.robot, rb.r) - mounts_[i].pointAt(ra.robot, ra.r);
       if (d.norm() <= kFlatSpan) continue;
       const double face = std::atan2(d.y(), d.x());
       for (ContactReport* r : {&ra, &rb}) {
         r->oriented = true;
-        r->phi = halfTurn(face - r->robot.theta);
+        r->phi = wrapHalfTurn(face - r->robot.theta);
       }
     }
   }

@@ -3,6 +3,7 @@
 // below sensing (signal/, io/, session/) and inference (blackboard/, mapping/) alike.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -14,6 +15,12 @@ struct WhiskerMount {
   Vec2 base;         // follicle position, metres
   double bearing;    // direction the whisker points, radians from the robot's +x
   double length;     // external length, metres
+
+  // Unit vector along the whisker, robot frame.
+  Vec2 direction() const { return {std::cos(bearing), std::sin(bearing)}; }
+  // The point r metres along the straight whisker from its base, arena frame, with the robot
+  // at `robot` (eqs. 4-6: where a report at r puts its contact).
+  Vec2 pointAt(const Pose2& robot, double r) const { return robot.toWorld(base + r * direction()); }
 };
 
 // The four horizontal front whiskers of the paper's mapping experiment (§2.2). Bases on the

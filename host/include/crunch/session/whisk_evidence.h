@@ -132,7 +132,5 @@ class WhiskEvidence {
   Counts counts_;
 };
 
-// An orientation modulo pi as a value in [0, pi) (ContactReport::phi's convention).
-double halfTurn(double angle);
 
 }  // namespace crunch
