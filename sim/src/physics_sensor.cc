@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -150,11 +151,20 @@ void PhysicsSensorModel::tally(const ContactReport& rep) {
   const bool on_leg = std::any_of(legs_.begin(), legs_.end(), [&](const OrientedRect& f) {
     return closestOnPerimeter(f, t.point_at_touch).distance < 0.005;
   });
-  // A leg's contact is a point: the error is the distance to it. A wall's is a face along which
-  // a pressed tip slides before the sweep measures it: the error is the distance to the face.
+  // The truth a located report measured: the whisker's true contact point nearest to it on the
+  // contact's track (WhiskerTruth::track). A pressed tip slides along a face or round a leg
+  // before and during the sweep, and the ramp locates where the contact was while it was
+  // measured, not the first touch; every point of the track was touched.
+  double err_track = std::numeric_limits<double>::infinity();
+  for (const Vec2& p : t.track) err_track = std::min(err_track, (at - p).norm());
+  // A leg's contact is a point: the error is the distance to the nearest track point (at most
+  // kTrackStep / 2 more than to the path through them). A wall's is a face: the error is the
+  // distance to the face.
   const Vec2 along{std::cos(t.tangent_at_touch), std::sin(t.tangent_at_touch)};
   const Vec2 off = at - t.point_at_touch;
-  const double err_pos = on_leg ? off.norm() : std::abs(off.x() * along.y() - off.y() * along.x());
+  const double err_pos = on_leg ? err_track : std::abs(off.x() * along.y() - off.y() * along.x());
+  // r against the first touch: the ramp's intercept is the heading at which the straight whisker
+  // met the point (docs/SIGNAL.md).
   const double err_r = rep.r - t.r_at_touch;
   ++errors_.reports;
   errors_.sum_r += err_r;
@@ -167,6 +177,7 @@ void PhysicsSensorModel::tally(const ContactReport& rep) {
   }
   errors_.position_errors.push_back(err_pos);
   (on_leg ? errors_.leg_position_errors : errors_.wall_position_errors).push_back(err_pos);
+  if (on_leg) errors_.leg_first_touch_errors.push_back(off.norm());
   const double tip_from = m.length - rig_->chain().tipZone();
   ++errors_.tip_confusion[t.r_at_touch >= tip_from ? 0 : 1][rep.r < tip_from ? 1 : 0];
 }

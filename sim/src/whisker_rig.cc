@@ -92,6 +92,10 @@ void WhiskerRig::trackTruth() {
       t.point_at_touch = contact->point;
       t.tangent_at_touch = std::atan2(contact->normal.y(), contact->normal.x()) + kPi / 2.0;
     }
+    if (t.track.empty() ||
+        (contact->point - t.track.back()).norm() >= WhiskerTruth::kTrackStep) {
+      t.track.push_back(contact->point);
+    }
     if (!t.touched || angle > t.peak_angle) {
       t.touched = true;
       t.peak_angle = angle;

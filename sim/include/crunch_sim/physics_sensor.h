@@ -52,8 +52,9 @@
 // scene). If the heading ever left the checked range, sense() would put the robot back on ODE at
 // once (never seen: the whisk overshoots its targets by at most one step's turn, 65 urad).
 //
-// Scoring: against the simulator's ground truth at the same peak (WhiskerTruth), the reports'
-// errors in r and phi are accumulated (errors()), for report.json's measured sigma_r, sigma_phi.
+// Scoring: against the simulator's ground truth of the contact (WhiskerTruth: its track of true
+// contact points and its first touch), the reports' errors in position, r and phi are
+// accumulated (errors()), for report.json's physics block.
 //
 // Ownership: owns its WhiskerRig; references the World, which must outlive it.
 // Thread-safety: none (ODE). Allocation: sense() reuses its buffers after the first poses.
@@ -71,8 +72,8 @@
 
 namespace crunch::sim {
 
-// Errors of the reports against the simulator's truth at the whisker's first touch (the point
-// the straight whisker first met: what a located report places; WhiskerTruth::*_at_touch).
+// Errors of the reports against the simulator's truth of the contact (WhiskerTruth): where the
+// whisker truly touched while it was measured (its track) and where it first touched.
 struct ReportErrors {
   int reports = 0;             // reports scored (the truth saw the whisker touch)
   int unscored = 0;            // reports whose whisker the truth never saw touching
@@ -83,9 +84,14 @@ struct ReportErrors {
   double sum_phi = 0.0, sum_phi2 = 0.0;
   // Distance from each scored report's contact point to the truth, metres: all, and split by
   // what was touched (a leg: a footprint no side of which is longer than 0.1 m; else a wall).
-  // For a leg, to the true point; for a wall, to the face through it (a pressed tip slides along
-  // a face before the sweep measures it: any point of the face is a true contact).
+  // For a leg, to the nearest point of the contact's true track (a pressed tip slides round a
+  // leg before and while the ramp measures it: WhiskerTruth::track); for a wall, to the face
+  // through the first touch (any point of the face is a true contact). The r error is against
+  // the first touch.
   std::vector<double> position_errors, leg_position_errors, wall_position_errors;
+  // Legs only: to the first touch (the straight whisker's first contact), which a contact that
+  // slid before the ramp was measured no longer touches (docs/SIGNAL.md).
+  std::vector<double> leg_first_touch_errors;
   // Tip or shaft (r in the models' tip zone), reported against true: [true shaft][reported shaft].
   int tip_confusion[2][2] = {{0, 0}, {0, 0}};
   int whisks = 0;

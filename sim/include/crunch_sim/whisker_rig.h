@@ -61,6 +61,11 @@ struct WhiskerTruth {
   double r_at_touch = 0.0;
   Vec2 point_at_touch = Vec2::Zero();
   double tangent_at_touch = 0.0;
+  // Every true contact point from the first touch on, each kTrackStep from the last kept: a tip
+  // pressed on a face or a leg slides along it as the whisker bends, so the whole track was
+  // touched (what a ramp measured after the slide lies on it).
+  static constexpr double kTrackStep = 0.001;  // metres
+  std::vector<Vec2> track;
 };
 
 class WhiskerRig {
