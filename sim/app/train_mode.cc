@@ -100,10 +100,29 @@ void printDone(const TrainOptions& opt, const sim::TrainingOptions& proto,
                 "(paper -2.2, 21.2)\n",
                 cv.mean_error * kDeg, cv.sd_error * kDeg, cv.accuracy * 100.0);
   out << line;
+  if (fit.has_ramp) {
+    const sim::RampEvaluation& r = fit.ramp;
+    std::snprintf(line, sizeof line,
+                  "ramp calibration: gain %.4f, compliance_scale %.4f (%d contacts, %d outliers); "
+                  "held-out r error rms %.2f mm (mean %+.2f), nominal %.2f mm (mean %+.2f); "
+                  "eq. 2 on the same contacts %.1f mm\n",
+                  r.calibration.gain, r.calibration.compliance_scale, r.fit.used, r.fit.outliers,
+                  r.fitted.rms_all * 1e3, r.fitted.mean_all * 1e3, r.nominal.rms_all * 1e3,
+                  r.nominal.mean_all * 1e3, r.eq2.rms_all * 1e3);
+    out << line;
+  }
+  if (fit.faces.located > 0) {
+    std::snprintf(line, sizeof line,
+                  "orientation from two whiskers' ramps: %d of %zu wall whisks, mean %.2f deg, "
+                  "sd %.2f deg\n",
+                  fit.faces.located, fit.faces.trials.size(), fit.faces.mean_error * kDeg,
+                  fit.faces.sd_error * kDeg);
+    out << line;
+  }
   out << "collected " << proto.plannedWhisks() << " whisks (" << std::lround(data.simulated_s)
       << " s simulated) in " << formatDuration(wall_s) << "; wrote " << opt.out_dir << "/"
       << "{models.json,training_report.json,fig9_peak_deflection,table1_radial_sigma,"
-         "fig10_orientation_error}"
+         "fig10_orientation_error" << (fit.has_ramp ? ",ramp_distance,table1_ramp_sigma" : "") << "}"
       << (opt.models_out.empty() ? "" : " and " + opt.models_out) << "\n";
 }
 

@@ -8,6 +8,8 @@
 
 #include "crunch/behaviour/body_whisk.h"
 #include "crunch/core/rng.h"
+#include "crunch/robot/whisker_beam.h"
+#include "crunch/session/whisk_evidence.h"
 #include "crunch/scene/scene.h"
 
 namespace crunch::sim {
@@ -46,6 +48,7 @@ struct WhiskResult {
   std::vector<signal::ContactEpisode> episodes;  // copies (windows included)
   std::vector<std::array<WhiskerTruth, signal::kWhiskers>> truths;
   std::vector<Pose2> onset_poses;
+  std::vector<SamplePose> poses;  // onset, peaks and ramps of every episode
   std::uint32_t truth_touched = 0;  // whiskers the simulator saw touch during the whisk
   std::array<double, signal::kWhiskers> max_theta{};  // detector theta, max over the whisk
   double start_time = 0.0;
@@ -89,6 +92,15 @@ class Collector {
       out.episodes.push_back(*ep);
       out.truths.push_back(rig.episodeTruth());
       out.onset_poses.push_back(rig.poseAtSample(ep->start_sample));
+      auto keep = [&](std::uint64_t sample) {
+        out.poses.push_back({sample, rig.poseAtSample(sample)});
+      };
+      keep(ep->start_sample);
+      for (const signal::WhiskerContact& c : ep->whiskers) {
+        if (!c.touched) continue;
+        keep(ep->start_sample + static_cast<std::uint64_t>(std::max<std::int64_t>(c.peak_sample, 0)));
+        if (c.ramp.valid) keep(c.ramp.first_sample);
+      }
     };
     for (long n = 0; n < max_steps; ++n) {
       take(rig.step());
@@ -157,8 +169,40 @@ double maxFreeTheta(const WhiskResult& r) {
 // The pipeline's sample index k is the rig's step k: time k * dt since the rig was created.
 double sampleTime(std::uint64_t sample, double dt) { return static_cast<double>(sample) * dt; }
 
+Pose2 poseOf(const std::vector<SamplePose>& poses, std::uint64_t sample, const Pose2& fallback) {
+  for (const SamplePose& p : poses) {
+    if (p.sample == sample) return p.pose;
+  }
+  return fallback;
+}
+
+// Whisker w's first contact of the whisk: the first episode in which the pipeline saw it touch.
+LocatedContact locate(const WhiskResult& r, int whisker) {
+  LocatedContact out;
+  const auto wi = static_cast<std::size_t>(whisker);
+  for (std::size_t i = 0; i < r.episodes.size(); ++i) {
+    const signal::WhiskerContact& c = r.episodes[i].whiskers[wi];
+    if (!c.touched) continue;
+    const WhiskerTruth& t = r.truths[i][wi];
+    out.detected = true;
+    out.episode = static_cast<int>(i);
+    out.ramp = c.ramp;
+    out.ramp_pose = poseOf(r.poses, c.ramp.first_sample, r.start_pose);
+    out.f1 = c.f1;
+    out.truth_touched = t.touched;
+    out.r_touch = t.r_at_touch;
+    out.r_peak = t.r_at_peak;
+    out.point_touch = t.point_at_touch;
+    break;
+  }
+  return out;
+}
+
+double leverOf(const WhiskerMount& m) { return m.base.dot(m.direction()); }
+
 RadialContact radialContact(const WhiskResult& r, int whisker, double dt) {
   RadialContact c;
+  c.located = locate(r, whisker);
   c.whisker = whisker;
   c.max_free_theta = maxFreeTheta(r);
   c.other_touched = r.truth_touched & ~(1u << whisker);
@@ -217,6 +261,10 @@ WhiskerRig::Options physicsRigOptions(std::uint64_t seed) {
 
 std::vector<double> trainingAngles() { return signal::defaultOrientationAngles(); }
 
+const char* rampObjectName(RampObject object) {
+  return object == RampObject::kLeg ? "leg" : "post";
+}
+
 Status TrainingOptions::validate() const {
   auto bad = [](const std::string& field, const std::string& why) {
     return Error{"training options: " + field + ": " + why};
@@ -244,6 +292,27 @@ Status TrainingOptions::validate() const {
   if (!(std::isfinite(distance_jitter) && distance_jitter >= 0.0 && distance_jitter < 0.01)) {
     return bad("distance_jitter", num(distance_jitter) + " m: need [0, 0.01)");
   }
+  for (std::size_t i = 0; i < ramp_whiskers.size(); ++i) {
+    const int w = ramp_whiskers[i];
+    if (w < 0 || w >= signal::kWhiskers) {
+      return bad("ramp_whiskers[" + std::to_string(i) + "]",
+                 std::to_string(w) + " is not a whisker index 0..3");
+    }
+  }
+  for (std::size_t i = 0; i < ramp_distances.size(); ++i) {
+    const double d = ramp_distances[i];
+    if (!(std::isfinite(d) && d - distance_jitter >= 0.01 && d + distance_jitter <= 0.14)) {
+      return bad("ramp_distances[" + std::to_string(i) + "]",
+                 num(d) + " m (with the jitter) is not in [0.01, 0.14] m of the whisker");
+    }
+  }
+  if (ramp_repeats < 0) return bad("ramp_repeats", "must be >= 0");
+  if (!(std::isfinite(edge_min) && std::isfinite(edge_max) && 0.0 < edge_min &&
+        edge_min <= edge_max && edge_max < kPi / 2.0 - 0.1)) {
+    return bad("edge_min/edge_max", num(edge_min) + ".." + num(edge_max) +
+                                        " rad: need 0 < min <= max < pi/2 - 0.1 (both faces "
+                                        "beyond the edge, with the eps margin)");
+  }
   for (std::size_t i = 0; i < angles.size(); ++i) {
     const double a = angles[i];
     if (!(std::isfinite(a) && a > 0.0 && a < kPi)) {
@@ -270,7 +339,9 @@ Status TrainingOptions::validate() const {
 int TrainingOptions::plannedWhisks() const {
   const int radial = static_cast<int>(radial_whiskers.size() * radial_distances.size()) *
                      radial_repeats * (radial_heldout ? 2 : 1);
-  return radial + static_cast<int>(angles.size()) * orientation_repeats;
+  const int ramp = static_cast<int>(ramp_whiskers.size() * ramp_distances.size()) * 2 *
+                   (ramp_both_directions ? 2 : 1) * ramp_repeats * (ramp_heldout ? 2 : 1);
+  return radial + ramp + static_cast<int>(angles.size()) * orientation_repeats;
 }
 
 Pose2 placeForPole(const std::vector<WhiskerMount>& mounts, int whisker, double d, double eps,
@@ -281,6 +352,16 @@ Pose2 placeForPole(const std::vector<WhiskerMount>& mounts, int whisker, double 
   const Pose2 rot{0.0, 0.0, heading};
   const Vec2 centre = base - rot.toWorld(m.base);
   return {centre.x(), centre.y(), heading};
+}
+
+Pose2 placeForEdge(const std::vector<WhiskerMount>& mounts, int whisker, double d, double eps,
+                   int direction, const Vec2& corner, double face_dir, double edge) {
+  // The line base -> corner: the first face of the sweep leaves the corner `edge` beyond it in
+  // the sweep's sense, the second a quarter turn further.
+  const double radial =
+      direction > 0 ? face_dir - edge : face_dir + kPi / 2.0 + edge;
+  const double s = direction > 0 ? 1.0 : -1.0;
+  return placeForPole(mounts, whisker, d, s * eps, corner, radial - s * eps);
 }
 
 Pose2 placeWall(const std::vector<WhiskerMount>& mounts, double angle, double depth, double lateral,
@@ -331,6 +412,7 @@ Result<TrainingData> collectTrainingData(const TrainingOptions& options) {
             const WhiskResult r = col.whisk(rig, pose);
             col.rest(rig, kRadialStart);
             RadialContact c = radialContact(r, w, rig.robot().options().dt);
+            c.lever = leverOf(mounts[static_cast<std::size_t>(w)]);
             c.set = set;
             c.repeat = rep;
             c.nominal_d = nominal;
@@ -339,6 +421,82 @@ Result<TrainingData> collectTrainingData(const TrainingOptions& options) {
             c.pose = pose;
             data.radial.push_back(std::move(c));
             col.tick(phase);
+          }
+        }
+      }
+      data.missing_frames += rig.missingFrames();
+    }
+  }
+
+  // ---- Ramp: a table's leg and a post in one 6 x 6 m arena, each met at its corner C whose
+  // faces leave it along -x and -y; the table is 2 m square so its other legs are out of reach.
+  const bool ramp = !options.ramp_whiskers.empty() && !options.ramp_distances.empty() &&
+                    options.ramp_repeats > 0;
+  if (ramp) {
+    Scene scene;
+    scene.width = scene.depth = 6.0;
+    scene.poses.clear();
+    scene.source = "<training leg and post>";
+    TableSpec table;
+    table.pose = Pose2{3.0, 3.0, 0.0};
+    table.width = table.depth = 2.0;
+    table.leg = 0.05;
+    scene.tables.push_back(table);
+    const Vec2 leg_corner{4.0, 4.0};  // the +x+y leg's outer corner
+    constexpr double kPost = 0.02;
+    const Vec2 post_corner{1.0, 4.5};
+    scene.walls.push_back({post_corner + Vec2(-kPost, -0.5 * kPost),
+                           post_corner + Vec2(0.0, -0.5 * kPost)});
+    const double face_dir = kPi;  // faces along -x and -y from each corner
+    const Pose2 start{1.0, 1.0, 0.0};
+    auto world = World::build(scene);
+    for (int set = 0; set < (options.ramp_heldout ? 2 : 1); ++set) {
+      auto made = col.makeRig(*world, start, streamSeed(options.seed, 50 + set));
+      if (!made) return made.error();
+      WhiskerRig& rig = *made.value();
+      Rng rng(streamSeed(options.seed, 60 + set));
+      const char* phase = set == 0 ? "ramp-train" : "ramp-heldout";
+      for (const int w : options.ramp_whiskers) {
+        for (const double nominal : options.ramp_distances) {
+          for (const RampObject object : {RampObject::kLeg, RampObject::kPost}) {
+            for (const int direction : {+1, -1}) {
+              if (direction < 0 && !options.ramp_both_directions) continue;
+              for (int rep = 0; rep < options.ramp_repeats; ++rep) {
+                RampContact c;
+                c.set = set;
+                c.whisker = w;
+                c.repeat = rep;
+                c.object = object;
+                c.direction = direction;
+                c.nominal_d = nominal;
+                c.eps = rng.uniform(options.eps_min, options.eps_max);
+                c.d = nominal + rng.uniform(-options.distance_jitter, options.distance_jitter);
+                c.lever = leverOf(mounts[static_cast<std::size_t>(w)]);
+                const Vec2& corner = object == RampObject::kLeg ? leg_corner : post_corner;
+                // Near the follicle the object's second face points back toward the body: an
+                // edge angle whose object would overlap the body is drawn again (so such
+                // contacts see the smaller edge angles; the ramp does not depend on it).
+                for (int draw = 0;; ++draw) {
+                  c.edge = rng.uniform(options.edge_min, options.edge_max);
+                  c.pose = placeForEdge(mounts, w, c.d, c.eps, direction, corner, face_dir, c.edge);
+                  if (!world->bodyCollides(c.pose)) break;
+                  if (draw == 100) {
+                    return Error{"ramp protocol: no edge angle in [edge_min, edge_max] keeps the "
+                                 "body clear of the " + std::string(rampObjectName(object)) +
+                                 " at " + num(c.d) + " m"};
+                  }
+                }
+                const WhiskResult r = col.whisk(rig, c.pose);
+                col.rest(rig, start);
+                c.contact = locate(r, w);
+                c.other_touched = r.truth_touched & ~(1u << w);
+                for (const signal::ContactEpisode& ep : r.episodes) {
+                  if (ep.truncated || ep.finished_early) c.truncated = true;
+                }
+                data.ramp.push_back(std::move(c));
+                col.tick(phase);
+              }
+            }
           }
         }
       }
@@ -382,6 +540,8 @@ Result<TrainingData> collectTrainingData(const TrainingOptions& options) {
             if (ep.whiskers[static_cast<std::size_t>(w)].touched) c.touched_mask |= 1u << w;
           }
         }
+        c.all_episodes = r.episodes;
+        c.poses = r.poses;
         data.orientation.push_back(std::move(c));
         col.tick("orientation");
       }
@@ -503,6 +663,160 @@ std::vector<signal::LabelledWindow> labelledWindows(
   std::vector<signal::LabelledWindow> out;
   for (const OrientationContact& c : contacts) {
     if (c.has_window) out.push_back({c.angle, c.repeat, c.window});
+  }
+  return out;
+}
+
+}  // namespace crunch::sim
+
+namespace crunch::sim {
+
+double rampDistance(const LocatedContact& c, double lever, const signal::RampCalibration& cal) {
+  static const WhiskerBeam beam;  // the host's description: the nominal whisker
+  return std::min(distanceFromRampSlope(beam, c.ramp.slope, lever, cal.gain, cal.compliance_scale),
+                  beam.external_length);
+}
+
+std::vector<RampSample> rampSamples(const std::vector<RampContact>& contacts, int set) {
+  std::vector<RampSample> out;
+  for (const RampContact& c : contacts) {
+    const LocatedContact& l = c.contact;
+    if (c.set != set || !l.detected || !l.truth_touched || !l.ramp.valid) continue;
+    out.push_back({l.ramp.slope, c.lever, l.r_touch});
+  }
+  return out;
+}
+
+ErrorStats errorStats(const std::vector<std::pair<int, double>>& errors) {
+  ErrorStats s;
+  std::array<double, signal::kWhiskers> sum{}, sum2{};
+  std::vector<double> abs;
+  double all = 0.0, all2 = 0.0;
+  for (const auto& [w, e] : errors) {
+    const auto i = static_cast<std::size_t>(w);
+    sum[i] += e;
+    sum2[i] += e * e;
+    ++s.n[i];
+    all += e;
+    all2 += e * e;
+    abs.push_back(std::abs(e));
+  }
+  for (std::size_t i = 0; i < sum.size(); ++i) {
+    if (s.n[i] == 0) continue;
+    s.mean[i] = sum[i] / s.n[i];
+    s.rms[i] = std::sqrt(sum2[i] / s.n[i]);
+  }
+  s.n_all = static_cast<int>(errors.size());
+  if (s.n_all > 0) {
+    s.mean_all = all / s.n_all;
+    s.rms_all = std::sqrt(all2 / s.n_all);
+    std::sort(abs.begin(), abs.end());
+    auto at = [&](double q) {  // nearest rank
+      const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(abs.size())));
+      return abs[std::min(abs.size() - 1, k == 0 ? 0 : k - 1)];
+    };
+    s.median_abs = at(0.5);
+    s.p90_abs = at(0.9);
+  }
+  return s;
+}
+
+Result<RampEvaluation> evaluateRamp(const TrainingData& data, const signal::RadialModel& eq2,
+                                    const RampFitOptions& options) {
+  RampEvaluation ev;
+  auto fit = fitRampCalibration(WhiskerBeam{}, rampSamples(data.ramp, 0), options);
+  if (!fit) return Error{"ramp calibration: " + fit.error().message};
+  ev.fit = fit.value();
+  ev.calibration.gain = ev.fit.gain;
+  ev.calibration.compliance_scale = ev.fit.compliance_scale;
+  if (auto s = ev.calibration.validate(); !s) return Error{"ramp calibration: " + s.error().message};
+  const signal::RampCalibration nominal;
+  std::vector<std::pair<int, double>> en, ef, e2;
+  for (const RampContact& c : data.ramp) {
+    if (c.set != 1) continue;
+    ++ev.heldout_contacts;
+    const LocatedContact& l = c.contact;
+    if (!l.detected || !l.truth_touched) {
+      ++ev.heldout_not_seen;
+      continue;
+    }
+    const auto wi = static_cast<std::size_t>(c.whisker);
+    e2.push_back({c.whisker, eq2.whiskers[wi].predict(l.f1) - l.r_peak});
+    if (!l.ramp.valid) {
+      ++ev.heldout_no_ramp;
+      continue;
+    }
+    en.push_back({c.whisker, rampDistance(l, c.lever, nominal) - l.r_touch});
+    ef.push_back({c.whisker, rampDistance(l, c.lever, ev.calibration) - l.r_touch});
+  }
+  if (ef.empty()) return Error{"ramp evaluation: the held-out set has no located contacts"};
+  ev.nominal = errorStats(en);
+  ev.fitted = errorStats(ef);
+  ev.eq2 = errorStats(e2);
+  std::vector<std::pair<int, double>> rn, rf;
+  for (const RadialContact& c : data.radial) {
+    const LocatedContact& l = c.located;
+    if (c.set != 1 || !l.detected || !l.truth_touched || !l.ramp.valid) continue;
+    rn.push_back({c.whisker, rampDistance(l, c.lever, nominal) - l.r_touch});
+    rf.push_back({c.whisker, rampDistance(l, c.lever, ev.calibration) - l.r_touch});
+  }
+  ev.radial_nominal = errorStats(rn);
+  ev.radial_fitted = errorStats(rf);
+  return ev;
+}
+
+FaceEvaluation evaluateFaces(const std::vector<OrientationContact>& contacts,
+                             const signal::SignalModels& models) {
+  FaceEvaluation out;
+  WhiskEvidence evidence(defaultWhiskerArray(), WhiskerBeam{});
+  evidence.setModels(models);
+  std::vector<ContactReport> reports;
+  std::vector<FreeRay> rays;
+  double sum = 0.0, sum2 = 0.0;
+  for (const OrientationContact& c : contacts) {
+    FaceTrial t;
+    t.repeat = c.repeat;
+    t.true_angle = c.angle;
+    evidence.begin();
+    // The models' radial lines give has_r; the ramp locates (whisk_evidence.h).
+    for (signal::ContactEpisode ep : c.all_episodes) {
+      for (std::size_t w = 0; w < ep.whiskers.size(); ++w) {
+        signal::WhiskerContact& wc = ep.whiskers[w];
+        if (!wc.touched) continue;
+        wc.has_r = true;
+        wc.r = models.radial.whiskers[w].predict(wc.f1);
+      }
+      evidence.take(ep, [&](std::uint64_t k) { return poseOf(c.poses, k, c.pose); });
+    }
+    reports.clear();
+    rays.clear();
+    evidence.end(reports, rays);
+    double err = 0.0;
+    int faces = 0;
+    for (const ContactReport& r : reports) {
+      ++t.reports;
+      if (r.r >= WhiskerBeam{}.external_length - models.radial.options.tip_zone) ++t.tips;
+      if (!r.oriented) continue;
+      // The wall runs along +x: its tangent is 0 modulo pi.
+      err += std::remainder(r.phi + r.robot.theta, kPi);
+      ++faces;
+    }
+    if (faces > 0) {
+      t.located = true;
+      t.error = err / faces;
+      ++out.located;
+      sum += t.error;
+      sum2 += t.error * t.error;
+      out.max_abs_error = std::max(out.max_abs_error, std::abs(t.error));
+    }
+    out.trials.push_back(t);
+  }
+  if (out.located > 0) {
+    out.mean_error = sum / out.located;
+    out.rms_error = std::sqrt(sum2 / out.located);
+    out.sd_error = out.located > 1 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / out.located) /
+                                                               (out.located - 1)))
+                                   : 0.0;
   }
   return out;
 }

@@ -16,6 +16,8 @@ using nlohmann::ordered_json;
 
 constexpr double kDeg = 180.0 / kPi;
 
+ordered_json facesJson(const FaceEvaluation& f);
+
 ordered_json lineJson(const signal::RadialLine& l) {
   return {{"a1", l.a1},         {"a0", l.a0},         {"sigma_m", l.sigma}, {"samples", l.samples},
           {"f1_min", l.f1_min}, {"f1_max", l.f1_max}, {"r_min", l.r_min},   {"r_max", l.r_max}};
@@ -240,12 +242,111 @@ ordered_json orientationJson(const TrainingOptions& proto, const TrainingData& d
                            {"mean_heading_offset_deg", os.mean_onset_offset * kDeg},
                            {"max_abs_heading_offset_deg", os.max_abs_onset_offset * kDeg}};
   orient["leave_one_repeat_out"] = crossValidationJson(fit.cv);
+  orient["faces_from_ramps"] = facesJson(fit.faces);
   orient["paper"] = {{"mean_error_deg", kPaperMeanDeg}, {"sd_error_deg", kPaperSdDeg}};
   const signal::OrientationModel& om = fit.models.orientation;
   orient["final_templates"] = {
       {"classes", om.templates.size()}, {"decimation", om.decimation}, {"columns", om.columns}};
   orient["data"] = orientationDataJson(data.orientation);
   return orient;
+}
+
+ordered_json statsJson(const ErrorStats& e) {
+  ordered_json per = ordered_json::array();
+  for (int w = 0; w < signal::kWhiskers; ++w) {
+    const auto i = static_cast<size_t>(w);
+    per.push_back({{"whisker", w}, {"rms_mm", e.rms[i] * 1e3}, {"mean_mm", e.mean[i] * 1e3},
+                   {"contacts", e.n[i]}});
+  }
+  return {{"rms_mm", e.rms_all * 1e3},       {"mean_mm", e.mean_all * 1e3},
+          {"median_abs_mm", e.median_abs * 1e3}, {"p90_abs_mm", e.p90_abs * 1e3},
+          {"contacts", e.n_all},             {"per_whisker", per}};
+}
+
+ordered_json rampJson(const TrainingOptions& proto, const TrainingData& data,
+                      const TrainingFit& fit) {
+  const RampEvaluation& ev = fit.ramp;
+  ordered_json r;
+  r["protocol"] = {{"whiskers", proto.ramp_whiskers},
+                   {"nominal_distances_m", proto.ramp_distances},
+                   {"objects", {"leg 5 cm (a table's), met at its edge", "post 2 cm, met at its edge"}},
+                   {"directions", proto.ramp_both_directions ? 2 : 1},
+                   {"repeats", proto.ramp_repeats},
+                   {"eps_range_rad", {proto.eps_min, proto.eps_max}},
+                   {"edge_range_rad", {proto.edge_min, proto.edge_max}},
+                   {"distance_jitter_m", proto.distance_jitter},
+                   {"label", "true distance at the contact's first step (r_at_touch)"}};
+  r["fit"] = {{"objective", "least squares of the distance read (clamped as the host reads it) "
+                            "minus the truth"},
+              {"gain", ev.fit.gain},
+              {"compliance_scale", ev.fit.compliance_scale},
+              {"gain_se", ev.fit.gain_se},
+              {"compliance_scale_se", ev.fit.compliance_scale_se},
+              {"samples", ev.fit.samples},
+              {"used", ev.fit.used},
+              {"outliers", ev.fit.outliers},
+              {"iterations", ev.fit.iterations},
+              {"training_rms_nominal_mm", ev.fit.rms_nominal * 1e3},
+              {"training_mean_nominal_mm", ev.fit.mean_nominal * 1e3},
+              {"training_rms_mm", ev.fit.rms * 1e3},
+              {"training_mean_mm", ev.fit.mean * 1e3}};
+  r["heldout"] = {{"contacts", ev.heldout_contacts},
+                  {"not_seen_touching", ev.heldout_not_seen},
+                  {"no_ramp", ev.heldout_no_ramp},
+                  {"ramp_nominal", statsJson(ev.nominal)},
+                  {"ramp_fitted", statsJson(ev.fitted)},
+                  {"eq2_truth_at_peak", statsJson(ev.eq2)}};
+  r["radial_protocol_heldout"] = {{"ramp_nominal", statsJson(ev.radial_nominal)},
+                                  {"ramp_fitted", statsJson(ev.radial_fitted)}};
+  ordered_json a = ordered_json::array();
+  const signal::RampCalibration nominal;
+  for (const RampContact& c : data.ramp) {
+    const LocatedContact& l = c.contact;
+    ordered_json e = {{"set", c.set == 0 ? "training" : "heldout"},
+                      {"whisker", c.whisker},
+                      {"object", rampObjectName(c.object)},
+                      {"direction", c.direction},
+                      {"nominal_d", c.nominal_d},
+                      {"d", c.d},
+                      {"eps", c.eps},
+                      {"edge", c.edge},
+                      {"pose", {c.pose.x, c.pose.y, c.pose.theta}},
+                      {"detected", l.detected},
+                      {"truth_touched", l.truth_touched},
+                      {"r_touch", l.r_touch},
+                      {"r_peak", l.r_peak},
+                      {"f1", l.f1},
+                      {"ramp_valid", l.ramp.valid},
+                      {"other_whiskers_touched_mask", c.other_touched}};
+    if (l.ramp.valid) {
+      e["slope"] = l.ramp.slope;
+      e["ramp_points"] = l.ramp.points;
+      e["ramp_residual_rms"] = l.ramp.residual_rms;
+      e["r_ramp_nominal"] = rampDistance(l, c.lever, nominal);
+      e["r_ramp_fitted"] = rampDistance(l, c.lever, ev.calibration);
+    }
+    a.push_back(e);
+  }
+  r["data"] = a;
+  return r;
+}
+
+ordered_json facesJson(const FaceEvaluation& f) {
+  ordered_json t = ordered_json::array();
+  for (const FaceTrial& x : f.trials) {
+    ordered_json e = {{"repeat", x.repeat}, {"true_deg", x.true_angle * kDeg},
+                      {"located", x.located}, {"reports", x.reports}, {"tip_reports", x.tips}};
+    if (x.located) e["error_deg"] = x.error * kDeg;
+    t.push_back(e);
+  }
+  return {{"method", "two whiskers' tip contacts located by their ramps (WhiskEvidence)"},
+          {"whisks", f.trials.size()},
+          {"located", f.located},
+          {"mean_error_deg", f.mean_error * kDeg},
+          {"sd_error_deg", f.sd_error * kDeg},
+          {"rms_error_deg", f.rms_error * kDeg},
+          {"max_abs_error_deg", f.max_abs_error * kDeg},
+          {"trials", t}};
 }
 
 }  // namespace
@@ -360,7 +461,7 @@ Chart table1Chart(const RadialEvaluation& protocol, const RadialEvaluation& firs
   return c;
 }
 
-Chart fig10Chart(const signal::CrossValidation& cv) {
+Chart fig10Chart(const signal::CrossValidation& cv, const FaceEvaluation* faces) {
   Chart c;
   c.options.title = "Fig. 10: surface orientation error, leave one repeat out";
   c.options.x_label = "true wall angle (deg)";
@@ -407,9 +508,146 @@ Chart fig10Chart(const signal::CrossValidation& cv) {
   std::snprintf(ours, sizeof ours, "sim: mean %.1f over all trials (sd %.1f)", cv.mean_error * kDeg,
                 cv.sd_error * kDeg);
   c.series.push_back(hline(ours, cv.mean_error * kDeg, chartPalette(0), false));
+  if (faces != nullptr && faces->located > 0) {
+    ChartSeries f;
+    char label[160];
+    std::snprintf(label, sizeof label,
+                  "ramp: face from two whiskers' tips (%d of %zu whisks; mean %.2f, sd %.2f)",
+                  faces->located, faces->trials.size(), faces->mean_error * kDeg,
+                  faces->sd_error * kDeg);
+    f.label = label;
+    f.style = SeriesStyle::kPoints;
+    f.marker = MarkerShape::kDiamond;
+    f.colour = chartPalette(2);
+    f.marker_size = 3.5;
+    for (const FaceTrial& t : faces->trials) {
+      if (!t.located) continue;
+      f.x.push_back(t.true_angle * kDeg - 1.5 * (t.repeat - 1.5));
+      f.y.push_back(t.error * kDeg);
+    }
+    c.series.push_back(f);
+  }
   c.series.push_back(hline("paper: mean -2.2, +-1 sd (21.2)", kPaperMeanDeg, red, true));
   c.series.push_back(hline("", kPaperMeanDeg + kPaperSdDeg, red, true));
   c.series.push_back(hline("", kPaperMeanDeg - kPaperSdDeg, red, true));
+  return c;
+}
+
+Chart rampDistanceChart(const TrainingData& data, const TrainingFit& fit) {
+  Chart c;
+  c.options.title = "Distance from the ramp against the true distance (held-out: legs, posts, both turns)";
+  c.options.x_label = "true contact distance from the follicle (mm)";
+  c.options.y_label = "estimated distance (mm)";
+  c.options.width_px = 900;
+  c.options.height_px = 620;
+  c.options.legend = LegendPosition::kTopLeft;
+  c.options.x_min = 0.0;
+  c.options.x_max = 150.0;
+  c.options.y_min = 0.0;
+  c.options.y_max = 200.0;  // room for the legend; eq. 2 reads up to ~190 mm near the follicle
+  ChartSeries diag;
+  diag.label = "estimate = truth";
+  diag.style = SeriesStyle::kLine;
+  diag.colour = ChartColour{0, 0, 0};
+  diag.line_width = 1.0;
+  diag.dashed = true;
+  diag.x = {0.0, 150.0};
+  diag.y = {0.0, 150.0};
+  ChartSeries eq2;
+  eq2.label = "eq. 2 on f1 (saved lines; truth at the peak)";
+  eq2.style = SeriesStyle::kPoints;
+  eq2.marker = MarkerShape::kTriangle;
+  eq2.colour = ChartColour{0.8, 0.1, 0.1};
+  eq2.marker_size = 2.5;
+  ChartSeries nominal;
+  nominal.label = "ramp, nominal calibration";
+  nominal.style = SeriesStyle::kPoints;
+  nominal.colour = grey();
+  nominal.marker_size = 2.0;
+  ChartSeries leg, post;
+  char label[160];
+  std::snprintf(label, sizeof label, "ramp, fitted (gain %.3f, compliance x %.3f): legs",
+                fit.ramp.calibration.gain, fit.ramp.calibration.compliance_scale);
+  leg.label = label;
+  leg.style = SeriesStyle::kPoints;
+  leg.colour = chartPalette(0);
+  leg.marker_size = 3.0;
+  post.label = "ramp, fitted: 2 cm posts";
+  post.style = SeriesStyle::kPoints;
+  post.marker = MarkerShape::kSquare;
+  post.colour = chartPalette(1);
+  post.marker_size = 3.0;
+  const signal::RampCalibration nominal_cal;
+  for (const RampContact& r : data.ramp) {
+    const LocatedContact& l = r.contact;
+    if (r.set != 1 || !l.detected || !l.truth_touched) continue;
+    const auto wi = static_cast<std::size_t>(r.whisker);
+    eq2.x.push_back(l.r_peak * 1e3);
+    eq2.y.push_back(fit.models.radial.whiskers[wi].predict(l.f1) * 1e3);
+    if (!l.ramp.valid) continue;
+    nominal.x.push_back(l.r_touch * 1e3);
+    nominal.y.push_back(rampDistance(l, r.lever, nominal_cal) * 1e3);
+    ChartSeries& s = r.object == RampObject::kLeg ? leg : post;
+    s.x.push_back(l.r_touch * 1e3);
+    s.y.push_back(rampDistance(l, r.lever, fit.ramp.calibration) * 1e3);
+  }
+  c.series = {diag, eq2, nominal, leg, post};
+  return c;
+}
+
+Chart table1RampChart(const TrainingFit& fit) {
+  Chart c;
+  c.options.title = "Table 1 re-measured: sigma of r on held-out contacts";
+  c.options.x_label = "whisker (5 = all whiskers together)";
+  c.options.y_label = "rms of r error (mm)";
+  c.options.width_px = 1000;
+  c.options.height_px = 560;
+  c.options.x_min = 0.4;
+  c.options.x_max = 5.6;
+  c.options.y_min = 0.0;
+  c.options.y_max = 12.0;
+  c.options.legend = LegendPosition::kTopLeft;
+  auto bars = [](const std::string& label, ChartColour colour, double offset,
+                 const std::array<double, 5>& values) {
+    ChartSeries s;
+    s.label = label;
+    s.style = SeriesStyle::kLine;
+    s.colour = colour;
+    s.line_width = 11.0;
+    for (int i = 0; i < 5; ++i) {
+      const double x = i + 1 + offset;
+      s.x.insert(s.x.end(), {x, x, NAN});
+      s.y.insert(s.y.end(), {0.0, values[static_cast<size_t>(i)], NAN});
+    }
+    return s;
+  };
+  auto mm = [](const ErrorStats& e) {
+    std::array<double, 5> v{};
+    for (int w = 0; w < 4; ++w) v[static_cast<size_t>(w)] = e.rms[static_cast<size_t>(w)] * 1e3;
+    v[4] = e.rms_all * 1e3;
+    return v;
+  };
+  std::array<double, 5> paper{}, today{};
+  const RadialEvaluation& first = fit.variants[fit.first_pass];
+  for (int w = 0; w < 4; ++w) {
+    paper[static_cast<size_t>(w)] = kPaperSigmaMm[w];
+    today[static_cast<size_t>(w)] = first.heldout_rms[static_cast<size_t>(w)] * 1e3;
+  }
+  paper[4] = kPaperComboMm;
+  today[4] = first.heldout_rms_all * 1e3;
+  char eq2_label[160];
+  std::snprintf(eq2_label, sizeof eq2_label,
+                "eq. 2 over the whole length (off the scale: all %.0f mm)",
+                fit.ramp.eq2.rms_all * 1e3);
+  c.series.push_back(bars("paper (CrunchBot, 85-135 mm, eq. 2)", grey(), -0.35, paper));
+  c.series.push_back(bars("today: eq. 2 at the peak, paper's pole protocol (85-135 mm)",
+                          chartPalette(3), -0.21, today));
+  c.series.push_back(bars("ramp, fitted, paper's pole protocol (truth at the touch)",
+                          chartPalette(4), -0.07, mm(fit.ramp.radial_fitted)));
+  c.series.push_back(bars("ramp, nominal, whole length (legs, posts, both turns)",
+                          ChartColour{0.7, 0.7, 0.7}, 0.07, mm(fit.ramp.nominal)));
+  c.series.push_back(bars("ramp, fitted, whole length", chartPalette(0), 0.21, mm(fit.ramp.fitted)));
+  c.series.push_back(bars(eq2_label, ChartColour{0.8, 0.1, 0.1}, 0.35, mm(fit.ramp.eq2)));
   return c;
 }
 
@@ -443,8 +681,16 @@ Result<TrainingFit> fitTrainingModels(const TrainingData& data, const TrainingOp
   fit.models.radial = fit.variants[fit.saved].fit.model;
   fit.models.orientation = std::move(templates).value();
   fit.models.pipeline = proto.rig.pipeline;  // what the models were trained with travels with them
+  if (!data.ramp.empty()) {
+    auto ramp = evaluateRamp(data, fit.models.radial);
+    if (!ramp) return ramp.error();
+    fit.ramp = std::move(ramp).value();
+    fit.has_ramp = true;
+    fit.models.ramp = fit.ramp.calibration;
+  }
   if (auto s = signal::validateModels(fit.models); !s)
     return Error{"the fitted models are not valid: " + s.error().message};
+  fit.faces = evaluateFaces(data.orientation, fit.models);
   return fit;
 }
 
@@ -453,8 +699,13 @@ Status writeTrainingFigures(const std::string& dir, const TrainingData& data,
   const std::pair<std::string, Chart> charts[] = {
       {"fig9_peak_deflection", fig9Chart(data.radial, fit.variants[fit.saved])},
       {"table1_radial_sigma", table1Chart(fit.variants.front(), fit.variants[fit.first_pass])},
-      {"fig10_orientation_error", fig10Chart(fit.cv)}};
-  for (const auto& [name, chart] : charts) {
+      {"fig10_orientation_error", fig10Chart(fit.cv, &fit.faces)}};
+  std::vector<std::pair<std::string, Chart>> all(std::begin(charts), std::end(charts));
+  if (fit.has_ramp) {
+    all.emplace_back("ramp_distance", rampDistanceChart(data, fit));
+    all.emplace_back("table1_ramp_sigma", table1RampChart(fit));
+  }
+  for (const auto& [name, chart] : all) {
     if (Status s = renderChartPng(chart, dir + "/" + name + ".png"); !s) return s;
     if (Status s = renderChartSvg(chart, dir + "/" + name + ".svg"); !s) return s;
   }
@@ -492,6 +743,7 @@ std::string trainingReportJson(const TrainingOptions& proto, const TrainingData&
       {"onset_threshold_rad", rig.pipeline.detector.min_onset_threshold}};
   j["radial"] = radialJson(proto, data, fit, rc);
   j["orientation"] = orientationJson(proto, data, fit, os);
+  if (fit.has_ramp) j["ramp"] = rampJson(proto, data, fit);
   return j.dump(1) + "\n";
 }
 

@@ -25,7 +25,7 @@ Error beamError(const std::string& field, const std::string& what) {
 bool positive(double x) { return std::isfinite(x) && x > 0.0; }
 bool nonNegative(double x) { return std::isfinite(x) && x >= 0.0; }
 
-constexpr double kMinContactDistance = 0.005;
+constexpr double kMinContactDistance = kMinRampContactDistance;
 
 }  // namespace
 

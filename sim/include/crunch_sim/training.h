@@ -19,6 +19,19 @@
 //   distance at that episode's peak (WhiskerTruth::r_at_peak). The nominal distance is kept too.
 //   A second set, from another seed, is the held-out evaluation set.
 //
+//   Ramp (issue 12; docs/TRAINING.md, "Ramp calibration"). What the ramp's calibration
+//   (signal::RampCalibration: gain, compliance_scale) is fitted on: point contacts over the
+//   whole whisker, from near the follicle to the tip, on the objects the mapper meets. Two
+//   objects stand in one World: a table's 5 cm square leg and a 2 cm square post, each met at a
+//   vertical edge (corner) C. Per contact, C is at distance d along whisker w's rest line rotated
+//   by eps toward the side the whisk first meets it: counter-clockwise (the toward leg) or
+//   clockwise (the away leg, the mirror image), and the object's two faces leave C at
+//   `edge` and edge + 90 degrees beyond the whisker's sweep, so the straight whisker meets the
+//   edge before either face. The label is the simulator's true distance at the first step of the
+//   contact (WhiskerTruth::r_at_touch: the point a located report places); the ramp is the
+//   pipeline's fit of the first episode in which whisker w touched. A second set from another
+//   seed is the held-out set.
+//
 //   Orientation (§2.5, Fig. 10). A long wall, met at the class angles (20..160 degrees), each
 //   `orientation_repeats` times. The angle is the wall's tangent direction relative to the
 //   robot's heading when the whisk starts (modulo pi: ContactReport::phi's convention). The
@@ -48,10 +61,12 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
+#include "crunch/robot/ramp_fit.h"
 #include "crunch/robot/shapelet.h"
 #include "crunch/signal/models_io.h"
 #include "crunch/signal/orientation_templates.h"
@@ -105,6 +120,21 @@ struct TrainingOptions {
   double distance_jitter = 0.001;  // +- metres, uniform per contact
   bool radial_heldout = true;      // collect the held-out set (another seed) too
 
+  // Ramp protocol (above): per whisker, per distance, per object (leg, post) and per direction
+  // (counter-clockwise, and clockwise if ramp_both_directions), `ramp_repeats` contacts. The
+  // distances run from near the follicle (at 20 mm the slope is ~9: the ramp's band is still
+  // 80 samples long at the whisk's rate) to the tip; eps is drawn from [eps_min, eps_max] and d
+  // jittered by distance_jitter as in the radial protocol; the edge angle is uniform in
+  // [edge_min, edge_max] (radians from the line base -> C; in (0, pi/2) so that both faces lie
+  // beyond the edge).
+  std::vector<int> ramp_whiskers = {0, 1, 2, 3};
+  std::vector<double> ramp_distances = {0.02, 0.035, 0.05, 0.065, 0.08, 0.095, 0.11, 0.125, 0.135};
+  int ramp_repeats = 1;
+  bool ramp_both_directions = true;
+  double edge_min = 0.17;  // ~10 degrees
+  double edge_max = 1.22;  // ~70 degrees
+  bool ramp_heldout = true;  // collect the held-out set (another seed) too
+
   // Orientation protocol (§2.5): the class angles, `orientation_repeats` times each.
   std::vector<double> angles = trainingAngles();
   int orientation_repeats = 4;
@@ -126,6 +156,20 @@ struct TrainingOptions {
   Status validate() const;
   // Whisks the options ask for.
   int plannedWhisks() const;
+};
+
+// Where a whisker's first contact of a whisk was located from (the pipeline's ramp), and the
+// truth of that contact.
+struct LocatedContact {
+  bool detected = false;       // the pipeline saw the whisker touch in some episode
+  int episode = -1;            // the first such episode
+  signal::ContactRamp ramp;    // its ramp (ramp.valid: a ramp was fitted)
+  Pose2 ramp_pose;             // the pose at the ramp's first sample (its position is the touch's)
+  double f1 = 0.0;             // that episode's f1 (eq. 1), for eq. 2
+  bool truth_touched = false;  // the simulator saw the whisker touch in that episode
+  double r_touch = 0.0;        // true distance at the contact's first step (metres)
+  double r_peak = 0.0;         // true distance at the episode's peak (eq. 2's label)
+  Vec2 point_touch = Vec2::Zero();
 };
 
 // One episode of a whisk, as far as whisker `whisker` of the contact is concerned.
@@ -159,9 +203,42 @@ struct RadialContact {
   int first_episode = -1;
   double first_f1 = 0.0;
   double first_r = 0.0;
+  LocatedContact located;           // the first pass's ramp and its truth at the touch
+  double lever = 0.0;               // the mount's lever offset b
   std::uint32_t other_touched = 0;  // other whiskers the simulator saw touch during the whisk
   double max_free_theta = 0.0;      // largest detector theta of whiskers that never touched, rad
   bool truncated = false;           // some episode was truncated or ended early
+};
+
+// The object of a ramp-protocol contact.
+enum class RampObject {
+  kLeg,   // a table's 5 cm square leg, met at a vertical edge
+  kPost,  // a 2 cm square post, met at a vertical edge
+};
+const char* rampObjectName(RampObject object);
+
+// One ramp-protocol contact (one whisk).
+struct RampContact {
+  int set = 0;  // 0: training, 1: held-out
+  int whisker = 0;
+  int repeat = 0;
+  RampObject object = RampObject::kLeg;
+  int direction = +1;      // +1: met turning counter-clockwise (toward leg); -1: clockwise
+  double nominal_d = 0.0;  // metres
+  double d = 0.0;          // metres, jittered: the edge's distance from the base
+  double eps = 0.0;        // radians, unsigned: the edge's offset from the rest line
+  double edge = 0.0;       // radians: the first face's angle from the line base -> edge
+  double lever = 0.0;      // the mount's lever offset b (WhiskerMount::base . direction())
+  Pose2 pose;              // where the robot was placed
+  LocatedContact contact;  // whisker `whisker`'s
+  std::uint32_t other_touched = 0;  // other whiskers the simulator saw touch during the whisk
+  bool truncated = false;
+};
+
+// A pose the pipeline's samples had, kept for locating the contacts afterwards.
+struct SamplePose {
+  std::uint64_t sample = 0;
+  Pose2 pose;
 };
 
 // One orientation-protocol contact (one whisk).
@@ -180,10 +257,16 @@ struct OrientationContact {
   double onset_offset = 0.0;
   std::uint32_t touched_mask = 0;  // whiskers the pipeline saw touch in the first episode
   double max_free_theta = 0.0;
+  // Every episode of the whisk and the poses of its onset, peaks and ramps: enough to run the
+  // host's WhiskEvidence over the whisk afterwards with any models (locating the wall as a face
+  // from two whiskers' tips, evaluateFaces).
+  std::vector<signal::ContactEpisode> all_episodes;
+  std::vector<SamplePose> poses;
 };
 
 struct TrainingData {
   std::vector<RadialContact> radial;  // training set, then held-out set
+  std::vector<RampContact> ramp;      // training set, then held-out set
   std::vector<OrientationContact> orientation;
   double simulated_s = 0.0;
   std::uint64_t missing_frames = 0;  // bridge frames the rigs' decoders never saw
@@ -199,6 +282,14 @@ Result<TrainingData> collectTrainingData(const TrainingOptions& options);
 // direction `axis` (the robot is turned so the whisker's rest direction is along `axis`).
 Pose2 placeForPole(const std::vector<WhiskerMount>& mounts, int whisker, double d, double eps,
                    const Vec2& face, double axis);
+
+// The ramp placement: where to put the robot so that whisker `whisker`'s rest line has the edge
+// `corner` at distance d from its base, rotated eps (unsigned) toward the side the whisk meets it
+// first (direction +1: counter-clockwise, -1: clockwise), the object's faces leaving the corner
+// at world directions face_dir and face_dir + pi/2, and the first face of the sweep at `edge`
+// radians from the line base -> corner.
+Pose2 placeForEdge(const std::vector<WhiskerMount>& mounts, int whisker, double d, double eps,
+                   int direction, const Vec2& corner, double face_dir, double edge);
 
 // The orientation placement: the pose at which the wall's tangent is at `angle` relative to
 // the robot's heading and the deepest straight whisker reaches `depth` past the wall's face.
@@ -254,6 +345,69 @@ struct RadialEvaluation {
 Result<RadialEvaluation> evaluateRadial(const std::vector<RadialContact>& contacts,
                                         const RadialVariant& variant,
                                         const signal::RadialOptions& options = {});
+
+// ---- The ramp (issue 12): the host's reading of a located contact, the calibration fit and
+// its evaluation (Table 1 re-measured), and faces located from two whiskers (Fig. 10
+// re-measured).
+
+// The distance the host reads from a located contact, as session::WhiskEvidence reads it:
+// distanceFromRampSlope of the nominal beam with the calibration, at most the whisker's length.
+double rampDistance(const LocatedContact& c, double lever, const signal::RampCalibration& cal);
+
+// The calibration fit's samples: the contacts of `set` whose whisker the pipeline and the
+// simulator both saw touch and whose contact has a ramp; the label is the truth at the touch.
+std::vector<RampSample> rampSamples(const std::vector<RampContact>& contacts, int set);
+
+// Errors of one estimate over a set of contacts (metres): per whisker and all together, and the
+// median and 90th percentile of |error|.
+struct ErrorStats {
+  std::array<double, signal::kWhiskers> rms{}, mean{};
+  std::array<int, signal::kWhiskers> n{};
+  double rms_all = 0.0, mean_all = 0.0, median_abs = 0.0, p90_abs = 0.0;
+  int n_all = 0;
+};
+// From (whisker, error) pairs.
+ErrorStats errorStats(const std::vector<std::pair<int, double>>& errors);
+
+struct RampEvaluation {
+  RampFitSummary fit;                   // on the ramp training set
+  signal::RampCalibration calibration;  // fit's gain and compliance_scale
+  // The ramp held-out set (the whole whisker, legs and posts, both directions): ramp distance
+  // with the nominal and the fitted calibration against the truth at the touch, and eq. 2 (the
+  // given lines on the first pass's f1) against its own label, the truth at the peak.
+  ErrorStats nominal, fitted, eq2;
+  // The same on the paper's radial protocol (held-out set: the pole, 85-135 mm), the ramp of
+  // the first pass against the truth at the touch.
+  ErrorStats radial_nominal, radial_fitted;
+  int heldout_contacts = 0;  // ramp held-out whisks
+  int heldout_no_ramp = 0;   // of which: the whisker touched but no ramp was fitted
+  int heldout_not_seen = 0;  //           the pipeline or the simulator did not see it touch
+};
+
+// Fits the calibration on the ramp training set (set 0) and scores it on the held-out sets.
+// `eq2` gives the old estimate beside it. Errors: the fit's (ramp_fit.h), or an empty held-out
+// set.
+Result<RampEvaluation> evaluateRamp(const TrainingData& data, const signal::RadialModel& eq2,
+                                    const RampFitOptions& options = {});
+
+// Fig. 10 with the new localisation: each orientation whisk through the host's WhiskEvidence
+// with `models`; a whisk whose reports include a face (two tip contacts, whisk_evidence.h)
+// gives the face's direction, scored against the wall's (error in (-pi/2, pi/2]).
+struct FaceTrial {
+  int repeat = 0;
+  double true_angle = 0.0;  // the class angle, radians
+  bool located = false;     // the whisk gave a face
+  double error = 0.0;       // radians (located only)
+  int reports = 0;          // located reports of the whisk
+  int tips = 0;             // of which tip contacts
+};
+struct FaceEvaluation {
+  std::vector<FaceTrial> trials;
+  int located = 0;
+  double mean_error = 0.0, sd_error = 0.0, rms_error = 0.0, max_abs_error = 0.0;  // radians
+};
+FaceEvaluation evaluateFaces(const std::vector<OrientationContact>& contacts,
+                             const signal::SignalModels& models);
 
 // The labelled windows of the orientation contacts that have a complete window.
 std::vector<signal::LabelledWindow> labelledWindows(

@@ -7,7 +7,10 @@
 // Figures (chart.h, PNG and SVG): fig9_peak_deflection (Fig. 9: peak deflection f1 against the
 // true radial distance, with the eq. 2 lines), table1_radial_sigma (Table 1: held-out sigma of r
 // per whisker and all together, beside the paper's), fig10_orientation_error (Fig. 10: the
-// orientation error per class angle, beside the paper's mean and sd).
+// orientation error per class angle, beside the paper's mean and sd, and the faces located from
+// two whiskers' ramps beside them), and with the ramp protocol (issue 12) ramp_distance (the
+// ramp's distance against the true distance over the whole whisker, eq. 2 beside it) and
+// table1_ramp_sigma (Table 1 re-measured: the ramp nominal and fitted, eq. 2, the paper).
 #pragma once
 
 #include <cstddef>
@@ -37,7 +40,13 @@ struct TrainingFit {
   std::size_t saved = 0;       // the variant whose lines are saved: f1 of saved_source, truth
   std::size_t first_pass = 0;  // f1 of the first pass, truth (Table 1's third bars)
   signal::CrossValidation cv;  // leave one repeat out (Fig. 10)
-  signal::SignalModels models;  // the saved lines, the final templates, the rig's pipeline
+  // The ramp calibration and its evaluation (when the data has ramp contacts; otherwise the
+  // saved calibration is nominal), and Fig. 10 with faces located by the saved models.
+  bool has_ramp = false;
+  RampEvaluation ramp;
+  FaceEvaluation faces;
+  // The saved lines, the final templates, the rig's pipeline, the ramp calibration.
+  signal::SignalModels models;
 };
 
 // Fits and evaluates everything. Errors: a radial fit that cannot be made, an orientation
@@ -48,9 +57,11 @@ Result<TrainingFit> fitTrainingModels(const TrainingData& data, const TrainingOp
 
 Chart fig9Chart(const std::vector<RadialContact>& contacts, const RadialEvaluation& saved);
 Chart table1Chart(const RadialEvaluation& protocol, const RadialEvaluation& first_pass);
-Chart fig10Chart(const signal::CrossValidation& cv);
+Chart fig10Chart(const signal::CrossValidation& cv, const FaceEvaluation* faces = nullptr);
+Chart rampDistanceChart(const TrainingData& data, const TrainingFit& fit);
+Chart table1RampChart(const TrainingFit& fit);
 
-// Writes the three figures into `dir` (PNG, then SVG, each atomically), stopping at the first
+// Writes the figures into `dir` (PNG, then SVG, each atomically), stopping at the first
 // failure, whose Error names the file.
 Status writeTrainingFigures(const std::string& dir, const TrainingData& data,
                             const TrainingFit& fit);

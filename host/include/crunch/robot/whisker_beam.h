@@ -83,7 +83,8 @@ double rampSlope(const WhiskerBeam& beam, double d, double lever_offset, double 
                  double compliance_scale = 1.0);
 // The contact distance whose rampSlope is `slope` (bisection; rampSlope falls with d), clamped to
 // [min_d, beam.external_length]: a slope below the tip's is a tip contact, one above min_d's a
-// contact at the follicle. min_d = 5 mm.
+// contact at the follicle. min_d = kMinRampContactDistance.
+inline constexpr double kMinRampContactDistance = 0.005;  // metres
 double distanceFromRampSlope(const WhiskerBeam& beam, double slope, double lever_offset,
                              double gain = 1.0, double compliance_scale = 1.0);
 
