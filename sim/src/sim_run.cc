@@ -71,6 +71,7 @@ PhysicsSummary physicsSummary(const SimScene& scene, const PhysicsSensorModel& s
   ps.models = o.models_path;
   RaySensorModel reference(*scene.world, defaultWhiskerArray(), NoiseRegime::realistic(), {});
   mopt.progress = nullptr;
+  mopt.chain_fusion = ChainFusion::kVote;  // the classifiers' evidence: as any gaussian run
   mopt.after_pose = nullptr;
   mopt.sampler.after_temperature = nullptr;
   const Map ref_map = runMapping(reference, scene.poses, scene.skipped, mopt).value();
@@ -139,6 +140,9 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   MappingOptions mopt = o.mapping;
   mopt.seed = o.seed;
   mopt.model = withSensorNoise(mopt.model, run.noise);
+  // The located chain tells a wall's face from a leg's (ContactReport::face_span): its chains'
+  // tables can compete in the posterior (ChainFusion::kPool). The classifiers' cannot.
+  mopt.chain_fusion = physics ? ChainFusion::kPool : ChainFusion::kVote;
   std::optional<SnapshotRecorder> recorder;
   if (o.snapshot_pose) {
     recorder.emplace(*o.snapshot_pose, o.snapshot_temperature, scene.poses, defaultWhiskerArray());

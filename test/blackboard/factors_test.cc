@@ -2,6 +2,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "test_builders.h"
@@ -88,4 +89,27 @@ TEST_CASE("Factors: acceptance probabilities of eq. 29", "[blackboard]") {
   CHECK(literalAcceptance(std::log(3.0), 2.0) == Approx(0.5625));
   CHECK(logAddExp(-INFINITY, 1.0) == 1.0);
   CHECK(logAddExp(std::log(2.0), std::log(3.0)) == Approx(std::log(5.0)));
+}
+
+TEST_CASE("Factors: a face known to be longer than a leg's diagonal is no leg's (face_span)",
+          "[blackboard]") {
+  const ModelParams p;
+  LegHyp leg;
+  leg.pose = {0, 0, 0};
+  leg.side = p.leg_side;
+  Shapelet s;
+  s.x = 0.030;
+  s.y = 0.0;
+  s.phi = kPi / 2;
+  const double kernel = std::log(p.alpha_S) - deltaLS(leg, s, p);
+  CHECK(logShapeletKernel(leg, s, p) == Approx(kernel).epsilon(kTight));
+  s.face_span = 0.99 * std::sqrt(2.0) * p.leg_side;  // two points of one leg can be this far
+  CHECK(legCanCause(p.leg_side, s));
+  CHECK(logShapeletKernel(leg, s, p) == Approx(kernel).epsilon(kTight));
+  s.face_span = 0.12;  // two whiskers' tips on one face, 12 cm apart: a wall's, not a leg's
+  CHECK_FALSE(legCanCause(p.leg_side, s));
+  CHECK(logShapeletKernel(leg, s, p) == -std::numeric_limits<double>::infinity());
+  // Left to the background term alone.
+  const std::vector<double> k = {logShapeletKernel(leg, s, p)};
+  CHECK(logShapeletDensity(k, p) == Approx(std::log(p.c_S)).epsilon(kTight));
 }

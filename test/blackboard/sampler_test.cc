@@ -134,6 +134,28 @@ TEST_CASE("Sampler: finds a table from shapelets on three of its legs", "[blackb
   CHECK(found >= 16);
 }
 
+TEST_CASE("Sampler: contacts on faces longer than a leg prime no leg and make no table",
+          "[blackboard]") {
+  // The shapelets of three legs that found a table above, each now known to lie on a face 0.3 m
+  // long (ContactReport::face_span): no leg can cause them, so nothing is proposed for them.
+  ModelParams p;
+  const Pose2 truth{2.0, 1.5, 0.4};
+  for (uint64_t seed = 1; seed <= 5; ++seed) {
+    Blackboard bb(p, 7, 256);
+    for (Shapelet s : TableShapelets(truth, p, {0, 1, 2})) {
+      s.face_span = 0.3;
+      if (bb.shapeletCount() < 7) bb.pushShapelet(s);
+    }
+    Rng rng(seed);
+    Sampler sampler(bb, {}, rng);
+    sampler.anneal();
+    std::vector<Pose2> map;
+    sampler.mapTables(map);
+    CHECK(map.empty());
+    CHECK(bb.liveLegs() == 0);
+  }
+}
+
 TEST_CASE("Sampler: same seed, same MAP, another seed may differ but stays valid",
           "[blackboard]") {
   auto run = [](uint64_t seed) {

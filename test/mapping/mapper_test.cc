@@ -319,3 +319,33 @@ TEST_CASE("Mapper: a run without shapelets has no live hypotheses", "[mapping][m
   CHECK(map.stats.peak_live_legs == 0);
   CHECK(map.tables.empty());
 }
+
+TEST_CASE("Mapper: pooled chains keep the scripted table; pool_steps is validated",
+          "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const Pose2 truth{1.5, 1.2, 0.3};
+  for (const std::uint64_t seed : {std::uint64_t{1}, std::uint64_t{2}, std::uint64_t{3}}) {
+    INFO("seed " << seed);
+    MappingOptions o = options(seed, 4);
+    o.chain_fusion = ChainFusion::kPool;
+    ScriptSensor sensor(script);
+    const Map map = runMapping(sensor, script.poses, 0, o).value();
+    REQUIRE(map.tables.size() == 1);
+    CHECK(std::hypot(map.tables[0].pose.x - truth.x, map.tables[0].pose.y - truth.y) < 0.05);
+    CHECK(std::abs(wrapPeriod(map.tables[0].pose.theta - truth.theta, kPi)) < 5.0 * kPi / 180.0);
+    // The pooled chain ran too: more proposals than the vote's chains alone.
+    MappingOptions v = o;
+    v.chain_fusion = ChainFusion::kVote;
+    ScriptSensor again(script);
+    CHECK(map.stats.proposals > runMapping(again, script.poses, 0, v).value().stats.proposals);
+  }
+  MappingOptions bad = options(1, 4);
+  bad.pool_steps = 0;
+  CHECK_FALSE(bad.validate());
+  CHECK(bad.validate().error().message.find("pool_steps") != std::string::npos);
+  bad.pool_steps = bad.sampler.schedule_steps + 1;
+  CHECK_FALSE(bad.validate());
+  bad.pool_steps = bad.sampler.schedule_steps;
+  CHECK(bad.validate());
+}

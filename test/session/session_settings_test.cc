@@ -83,6 +83,7 @@ TEST_CASE("Session settings: metadata written and read back gives the same optio
   CHECK(s.mapping.fuse.min_support == 2);
   CHECK(s.mapping.global_sweeps == 5);
   CHECK(s.mapping.global_chains == 3);
+  CHECK(s.mapping.chain_fusion == ChainFusion::kPool);  // the robot's chain locates contacts
   CHECK(s.mapping.model.sigma_r_shapelet == want.mapping.model.sigma_r_shapelet);
   CHECK(s.mapping.model.sigma_theta_shapelet == want.mapping.model.sigma_theta_shapelet);
   CHECK(s.mounts.size() == want.mounts.size());
@@ -103,7 +104,8 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
        {"seed", "start", "area", "checksum_includes_header", "onset_threshold", "mapping"}) {
     CHECK(st.contains(key));
   }
-  CHECK(st["mapping"].size() == 10);
+  CHECK(st["mapping"].size() == 11);
+  CHECK(st["mapping"]["chain_fusion"] == "pool");
 }
 
 TEST_CASE("Session settings: a bad value in the metadata is an error naming the field",
@@ -141,6 +143,19 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     const std::string e = errorOf(meta.dump());
     CHECK(e.find("settings.mapping.global_chains") != std::string::npos);
     CHECK(e.find("missing") != std::string::npos);
+  }
+  SECTION("a recording from before chain_fusion was recorded fused by the vote") {
+    json meta = json::parse(good);
+    meta["settings"]["mapping"].erase("chain_fusion");
+    auto got = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(got);
+    CHECK(got.value().mapping.chain_fusion == ChainFusion::kVote);
+  }
+  SECTION("a chain_fusion that is neither vote nor pool") {
+    CHECK(errorOf(withSetting(good, "mapping.chain_fusion", "majority"))
+              .find("settings.mapping.chain_fusion") != std::string::npos);
+    CHECK(errorOf(withSetting(good, "mapping.chain_fusion", 1))
+              .find("settings.mapping.chain_fusion") != std::string::npos);
   }
   SECTION("an unknown setting (it could change the map)") {
     CHECK(errorOf(withSetting(good, "mapping.negative_evidence", false))

@@ -254,6 +254,12 @@ TEST_CASE("WhiskEvidence: two tip contacts further apart than a leg lie on one f
     // The face runs along x: phi + the robot's heading is 0 modulo pi.
     CHECK(std::abs(wrapPeriod(r.phi + r.robot.theta, kPi)) < 1e-6);
   }
+  // Both know how long a stretch of the face they span: the distance between the two tips.
+  const Vec2 tip0 = m[0].pointAt(reports[0].robot, reports[0].r);
+  const Vec2 tip3 = m[3].pointAt(reports[1].robot, reports[1].r);
+  CHECK(reports[0].face_span == Approx((tip0 - tip3).norm()).margin(1e-9));
+  CHECK(reports[1].face_span == reports[0].face_span);
+  CHECK(reports[0].face_span > 0.12);
   CHECK(ev.counts().flat == 2);
   // Two contacts on one leg (5 cm apart) stay points.
   ev.begin();
@@ -266,6 +272,8 @@ TEST_CASE("WhiskEvidence: two tip contacts further apart than a leg lie on one f
   REQUIRE(reports.size() == 2);
   CHECK_FALSE(reports[0].oriented);
   CHECK_FALSE(reports[1].oriented);
+  CHECK(reports[0].face_span == 0.0);
+  CHECK(reports[1].face_span == 0.0);
 }
 
 TEST_CASE("WhiskEvidence: end() appends to what the vectors hold", "[mapping][evidence]") {

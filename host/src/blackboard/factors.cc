@@ -43,6 +43,7 @@ double logLegDensity(double delta_tl, bool has_parent, const ModelParams& p) {
 }
 
 double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
+  if (!legCanCause(leg.side, s)) return -std::numeric_limits<double>::infinity();
   return std::log(p.alpha_S) - deltaLS(leg, s, p);
 }
 

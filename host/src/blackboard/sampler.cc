@@ -127,6 +127,7 @@ Vec2 inwardNormal(const Shapelet& s) {
 
 void Sampler::primeLeg(int slot, double beta) {
   const Shapelet& s = bb_.shapelet(slot);
+  if (!legCanCause(bb_.params().leg_side, s)) return;  // no leg's face is that long
   LegHyp probe;
   probe.pose = s.oriented ? legOnFace(s) : legAtPoint(s);
   probe.side = bb_.params().leg_side;

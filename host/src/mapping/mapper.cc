@@ -15,7 +15,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
                                 const FreeSpaceGrid* free, Rng& rng) {
   // Independent chains from the same evidence. The log joint cannot pick among them: it grows
   // with every wall phantom, so the chain with the most phantoms would win. Instead a table is
-  // kept when at least half the chains agree on it (fused_map.h's clustering over chains).
+  // kept when at least half the chains agree on it (fused_map.h's clustering over chains), or
+  // all chains' tables compete in one more, cold chain (ChainFusion).
   const int n_chains = std::max(1, options.global_chains);
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
   std::vector<Pose2> found;
@@ -35,9 +36,32 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
   }
   FuseOptions agree = options.fuse;
-  agree.min_support = (n_chains + 1) / 2;
+  agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;
   for (const MapTable& t : fuseTables(chains, agree)) poses.push_back(t.pose);
+  if (options.chain_fusion == ChainFusion::kPool) {
+    // Each table any chain found starts with a leg at every corner; the coldest temperatures
+    // then let the posterior keep what the evidence pays for (a rival or a table without
+    // support dies, two overlapping tables cannot both stay: eq. 25).
+    Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
+                     4 * map.shapelets.size() + 8 * poses.size() + 64);
+    for (const Shapelet& s : map.shapelets) board.pushShapelet(s);
+    board.setFreeSpace(free);
+    for (const Pose2& p : poses) {
+      const int32_t id = board.addTable(p);
+      for (int c = 0; c < 4; ++c) {
+        const Vec2 at = p.toWorld(options.model.cornerOffset(c));
+        board.addLeg({at.x(), at.y(), wrapPeriod(p.theta, kPi / 2)}, id);
+      }
+    }
+    SamplerOptions so = options.sampler;
+    so.sweeps_per_temperature = options.global_sweeps;
+    so.schedule_steps = options.pool_steps;  // beta_i for i < pool_steps: the coldest
+    Sampler sampler(board, so, rng);
+    sampler.anneal();
+    map.stats.proposals += sampler.stats().proposals;
+    sampler.mapTables(poses);
+  }
 
   // Support: per-pose MAPs that agree with each global table.
   std::vector<MapTable> out;

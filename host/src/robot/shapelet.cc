@@ -22,6 +22,7 @@ bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mount
   // A noisy estimate a little past either end is still a contact on this whisker: the
   // estimator's answer is clamped to the whisker. One far outside it is not a measurement.
   if (rep.r < -m.length || rep.r > 2.0 * m.length) return false;
+  if (!(rep.face_span >= 0.0 && rep.face_span < 1e3)) return false;
   const double r = std::clamp(rep.r, 0.0, m.length);
 
   const Vec2 contact = m.pointAt(rep.robot, r);
@@ -32,6 +33,7 @@ bool toShapelet(const ContactReport& rep, const std::vector<WhiskerMount>& mount
   out.phi = wrapHalfTurn(rep.phi + rep.robot.theta);
   out.tau = 1.0;
   out.oriented = rep.oriented;
+  out.face_span = rep.face_span;
   out.ox = origin.x();
   out.oy = origin.y();
   out.pose_index = pose_index;

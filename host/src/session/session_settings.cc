@@ -32,6 +32,7 @@ json settingsJson(const RobotSessionOptions& s) {
             {"min_support", s.mapping.fuse.min_support},
             {"global_sweeps", s.mapping.global_sweeps},
             {"global_chains", s.mapping.global_chains},
+            {"chain_fusion", s.mapping.chain_fusion == ChainFusion::kPool ? "pool" : "vote"},
             {"sigma_r_shapelet", s.mapping.model.sigma_r_shapelet},
             {"sigma_theta_shapelet", s.mapping.model.sigma_theta_shapelet}}}};
 }
@@ -62,7 +63,7 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   const Json& m = required(st, p, "mapping");
   expectObject(m, mp, {"working_memory", "schedule_steps", "sweeps", "smart_proposals",
                        "smart_gain", "min_support", "global_sweeps", "global_chains",
-                       "sigma_r_shapelet", "sigma_theta_shapelet"});
+                       "chain_fusion", "sigma_r_shapelet", "sigma_theta_shapelet"});
   auto whole = [&m, &mp](std::string_view key) {
     return integer(required(m, mp, key), member(mp, key));
   };
@@ -74,6 +75,15 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   s.mapping.fuse.min_support = whole("min_support");
   s.mapping.global_sweeps = whole("global_sweeps");
   s.mapping.global_chains = whole("global_chains");
+  // Recordings made before it was recorded fused by the vote.
+  s.mapping.chain_fusion = ChainFusion::kVote;
+  if (m.contains("chain_fusion")) {
+    const std::string path = member(mp, "chain_fusion");
+    const Json& v = m["chain_fusion"];
+    if (!v.is_string() || (v != "vote" && v != "pool")) fail(path, "expected \"vote\" or \"pool\"");
+    const std::string f = v.get<std::string>();
+    s.mapping.chain_fusion = f == "pool" ? ChainFusion::kPool : ChainFusion::kVote;
+  }
   s.mapping.model.sigma_r_shapelet = requiredNumber(m, mp, "sigma_r_shapelet");
   s.mapping.model.sigma_theta_shapelet = requiredNumber(m, mp, "sigma_theta_shapelet");
 }
@@ -90,6 +100,9 @@ RobotSessionOptions sessionOptions(const signal::SignalModels& models,
   s.mapping.seed = seed;
   s.mapping.progress = nullptr;
   s.mapping.model = withSensorNoise(s.mapping.model, NoiseRegime::classifiers());
+  // The robot's chain locates contacts and tells faces from legs (sim_run.cc does the same for
+  // the physics sensor).
+  s.mapping.chain_fusion = ChainFusion::kPool;
   return s;
 }
 

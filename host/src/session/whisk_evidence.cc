@@ -64,6 +64,7 @@ void WhiskEvidence::classifyFaces() {
       for (ContactReport* r : {&ra, &rb}) {
         r->oriented = true;
         r->phi = wrapHalfTurn(face - r->robot.theta);
+        r->face_span = std::max(r->face_span, d.norm());
       }
     }
   }

@@ -23,7 +23,14 @@ double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p);
 // eq. 13 combined by eq. 17): log(c_L + alpha_L exp(-Delta_TL)); log c_L without a parent.
 double logLegDensity(double delta_tl, bool has_parent, const ModelParams& p);
 
-// log of the kernel alpha_S exp(-Delta_LS) of eq. 11.
+// Whether a leg of side `side` can cause `s`: not when s lies on a flat face known to be longer
+// than the leg's diagonal (Shapelet::face_span: two whiskers' tips on one face further apart
+// than any two points of the leg). Such a contact is left to the background term c_S (eq. 14).
+inline bool legCanCause(double side, const Shapelet& s) {
+  return s.face_span <= side * 1.4142135623730951;
+}
+
+// log of the kernel alpha_S exp(-Delta_LS) of eq. 11; -infinity where !legCanCause.
 double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams& p);
 
 // log p(S | pa(S)) by the continuous noisy-OR of eq. 17: log(c_S + sum_j kernel_j), from the

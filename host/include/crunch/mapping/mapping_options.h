@@ -13,6 +13,21 @@
 
 namespace crunch {
 
+// How the global inference's chains become the fused map (docs/BLACKBOARD.md, "Fusing the
+// chains").
+enum class ChainFusion {
+  // A table at least half the chains agree on. With the paper's classifier a wall's contact
+  // looks like a leg's face, so the model (which has no walls yet) explains walls by phantom
+  // tables; they differ from chain to chain and the vote drops them.
+  kVote,
+  // Every chain's tables (clustered) start one more chain over all shapelets, annealed over
+  // the schedule's `pool_steps` coldest temperatures: the posterior decides among them, so a
+  // table one chain found is kept if the evidence pays for it. Needs evidence the model can
+  // tell from what it cannot explain: the located chain's faces longer than a leg
+  // (ContactReport::face_span) no leg can cause.
+  kPool,
+};
+
 struct MappingOptions {
   ModelParams model;
   SamplerOptions sampler;
@@ -22,7 +37,9 @@ struct MappingOptions {
   // > 0: the fused map is one annealing over all shapelets with this many sweeps per
   // temperature (global inference); 0: clustering of the per-pose MAPs (fused_map.h).
   int global_sweeps = 8;
-  int global_chains = 8;  // independent chains; a table needs half of them to agree
+  int global_chains = 8;  // independent chains
+  ChainFusion chain_fusion = ChainFusion::kVote;
+  int pool_steps = 4;  // kPool: the coldest temperatures of the schedule the pooled chain runs
   // The global inference also weighs negative evidence: where whiskers swept and touched
   // nothing (free_space.h). Per-pose MAPs never do (the paper's collation).
   bool negative_evidence = true;
@@ -37,7 +54,7 @@ struct MappingOptions {
 
   // Every setting of the run: model.validate(), sampler.validate(), fuse.validate() (their
   // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
-  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256.
+  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256, pool_steps 1..sampler.schedule_steps.
   // okStatus(), or an Error naming the first bad field. runMapping and session::RobotSession
   // call it; a Mapper must be given valid options.
   Status validate() const;

@@ -19,6 +19,10 @@ struct ContactReport {
   // phi was measured (a flat surface); false: an edge or a point, whose orientation is unknown
   // and whose shapelet has no angle term (blackboard/factors.h).
   bool oriented = true;
+  // Length of one flat face the contact is known to lie on, metres: the distance between two
+  // whiskers' located tips on it (session/whisk_evidence.h); 0 when unknown. A face longer than
+  // a leg's diagonal is no leg's (factors.h).
+  double face_span = 0.0;
 };
 
 // An allocentric shapelet (the observation node of the blackboard).
@@ -27,6 +31,7 @@ struct Shapelet {
   double phi = 0.0;     // surface orientation, modulo pi
   double tau = 1.0;     // texture; all surfaces have tau = 1 in the present system
   bool oriented = true;  // phi measured (ContactReport::oriented)
+  double face_span = 0.0;  // ContactReport::face_span, metres
   double ox = 0.0, oy = 0.0;  // where it was sensed from (the whisker base): the free side
   int pose_index = -1;
   int whisker = -1;
