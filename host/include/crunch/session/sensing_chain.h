@@ -13,7 +13,10 @@
 // the odometry integrated from the Create's OI bytes; the simulator: its exact pose, §2.8). Every
 // pipeline sample that a feed() completes is stamped with the pose given with those bytes, and
 // kept in a ring of kPoseHistory samples, from which the reports take the pose at an episode's
-// first contact and at each whisker's peak (WhiskEvidence::take).
+// first contact and at each whisker's peak (WhiskEvidence::take). A pose source that knows a
+// moment's pose only later (the robot's odometry, between the Create's packets) uses
+// feedTimed() / release() instead: samples wait in a queue with their time, the behaviour's
+// contact mask comes from live detectors that do not wait.
 //
 // Which contacts are reported: the episodes that end while a whisk is open (beginWhisk() ..
 // endWhisk()) — the body whisk's own, including the episode of the contact that started it,
