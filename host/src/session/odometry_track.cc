@@ -87,17 +87,30 @@ double OdometryTrack::levelAt(std::uint64_t t) const {
   const std::size_t i = lo - 1;
   const Knot& a = knot(i);
   const bool last = i + 1 == knots_n_;
-  if (!last && !a.rest && knot(i + 1).t - a.t <= max_gap_ns_) {  // a turn: linear
+  const double rp = i >= 1 ? rate(i - 1) : 0.0;
+  const double dt_a = static_cast<double>(t - a.t) / kNsPerS;
+  if (!last && !a.rest && knot(i + 1).t - a.t <= max_gap_ns_) {
     const Knot& b = knot(i + 1);
-    return a.level + (b.level - a.level) * static_cast<double>(t - a.t) / static_cast<double>(b.t - a.t);
+    const double gap_s = static_cast<double>(b.t - a.t) / kNsPerS;
+    if (rp != 0.0 && sign(rp) != sign(b.level - a.level)) {
+      // A reversal: on at the previous rate to a peak f degrees past a, back to b at the next
+      // rate; the gap fixes f: f / |rp| + (1 + f) / |rn| = gap.
+      double rn = std::abs(rate(i + 1));
+      if (rn == 0.0) rn = std::abs(rp);
+      const double f = std::clamp((gap_s - 1.0 / rn) / (1.0 / std::abs(rp) + 1.0 / rn), 0.0, 1.0);
+      const double peak_s = f / std::abs(rp);
+      if (dt_a <= peak_s) return a.level + rp * dt_a;
+      const double peak = a.level + sign(rp) * f;
+      return peak + (b.level - peak) * (dt_a - peak_s) / (gap_s - peak_s);
+    }
+    // A turn: linear.
+    return a.level + (b.level - a.level) * dt_a / gap_s;
   }
   // A stop after knot i (or nothing known after it): go on at the previous segment's rate to
   // half a degree past the knot, and hold there (exactly at the knot after the rest start).
-  const double rp = i >= 1 ? rate(i - 1) : 0.0;
   double s = sign(rp);
   if (s == 0.0 && i >= 1) s = sign(a.level - knot(i - 1).level);
   const double hold = a.rest ? a.level : a.level + 0.5 * s;
-  const double dt_a = static_cast<double>(t - a.t) / kNsPerS;
   const double hold_begin_s = rp != 0.0 ? std::abs(hold - a.level) / std::abs(rp) : 0.0;
   if (dt_a < hold_begin_s) return a.level + rp * dt_a;
   if (last) return hold;

@@ -16,6 +16,9 @@
 // low speed (edge timing). Consecutive knots differ by exactly one degree (or several within one
 // packet, spread evenly over it).
 //
+// A reversal between two knots (the previous segment went the other way) goes on at the previous
+// rate to a peak and back at the next rate; the gap between the knots fixes the peak (f degrees
+// past the knot: f / |rate before| + (1 + f) / |rate after| = gap).
 // A stop between two knots (their gap longer than Options::max_gap_s: slower than any turn the
 // robot makes) is not one slow turn: the heading goes on at the previous segment's rate to half a
 // degree past its knot, holds, and reaches the next knot at the following segment's rate (the
@@ -46,10 +49,11 @@
 namespace crunch::session {
 
 struct OdometryTrackOptions {
-  // A gap between two heading knots longer than this is a stop, not a slow turn; also how long
-  // a pose waits for the knots after it at most. The robot's slowest turn (pi/24 rad/s) steps
-  // every 0.13 s; two of its steps fit in 0.3 s.
-  double max_gap_s = 0.3;
+  // A gap between two heading knots longer than this is a stop, not a slow turn or a reversal;
+  // also how long a pose waits for the knots after it at most. The robot's slowest turn
+  // (pi/24 rad/s) steps every 0.13 s, and reversing it between two knots takes up to three
+  // degrees of travel, 0.4 s.
+  double max_gap_s = 0.45;
   // okStatus(), or an Error naming the bad field (0.01 .. 10 s).
   Status validate() const;
 };
