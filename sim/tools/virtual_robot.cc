@@ -207,6 +207,11 @@ int main(int argc, char** argv) {
         batch[at + 8] ^= 0x5A;  // inside the first frame's payload: its CRC fails
         ++corrupted;
       }
+      // The tick's frames go to the bridge before the Create answers for the same tick: the
+      // two streams reach the host in the order the robot made them, as on the real robot,
+      // also when the harness runs behind the wall clock and steps many ticks at once.
+      if (bridge.plugged()) bridge.push(batch);  // unplugged: the frames are lost, as on a bus
+      batch.clear();
       create.pump();
       ++steps;
     }
@@ -231,10 +236,6 @@ int main(int argc, char** argv) {
       create.injectGarbage(kGarbage);
       garbage += sizeof kGarbage;
       next_garbage += garbage_every;
-    }
-    if (!batch.empty()) {
-      if (bridge.plugged()) bridge.push(batch);  // unplugged: the frames are lost, as on a bus
-      batch.clear();
     }
     if (steps == 0) sleepFor(0.0005);  // ahead of the wall clock: wait for it
   }

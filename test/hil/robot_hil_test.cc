@@ -29,10 +29,17 @@ namespace {
 using nlohmann::json;
 namespace fs = std::filesystem;
 
-const std::string kScene = std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/hil_one_table.json";
-// The scene's one listed pose: the robot starts there, clear of everything, facing the table.
-const std::string kStart = "--start-x 0.3 --start-y 0.775 --start-theta 0";
-const std::string kArea = "--area-width 2 --area-depth 2";
+// A hil scene and where the robot starts in it: the scene's one listed pose, clear of everything.
+struct HilScene {
+  std::string path;
+  std::string robot_frame;  // crunchhost's --start-* and --area-* for that pose and arena
+};
+const HilScene kOneTable{std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/hil_one_table.json",
+                         "--start-x 0.3 --start-y 0.775 --start-theta 0 --area-width 2 "
+                         "--area-depth 2"};
+const HilScene kTwoTables{std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/hil_two_tables.json",
+                          "--start-x 0.35 --start-y 0.35 --start-theta 0.785 --area-width 2.5 "
+                          "--area-depth 2.5"};
 
 struct Run {
   int exit_code = -1;
@@ -59,11 +66,12 @@ Run run(const std::string& command) {
 }
 
 // `crunchhost --robot ARGS` inside the virtual robot, with the harness's own fault flags.
-Run virtualRobot(const std::string& harness_flags, const std::string& robot_args) {
+Run virtualRobot(const std::string& harness_flags, const std::string& robot_args,
+                 const HilScene& scene = kOneTable, int time_limit_s = 120) {
   std::cout << "hil: virtual devices (umockdev USB bridge, pty Create emulator)" << std::endl;
-  return run(std::string(CRUNCH_VIRTUAL_ROBOT) + " --scene " + kScene + " --time-limit 120 " +
-             harness_flags + " -- " + CRUNCHHOST + " --robot --create {create} " + kStart + " " +
-             kArea + " " + robot_args);
+  return run(std::string(CRUNCH_VIRTUAL_ROBOT) + " --scene " + scene.path + " --time-limit " +
+             std::to_string(time_limit_s) + " " + harness_flags + " -- " + CRUNCHHOST +
+             " --robot --create {create} " + scene.robot_frame + " " + robot_args);
 }
 
 json readJson(const fs::path& path) {
@@ -99,6 +107,56 @@ double distanceToSurface(const crunch::Scene& scene, const crunch::Vec2& p) {
 }
 
 double angleDiff(double a, double b) { return std::abs(crunch::wrapPi(a - b)); }
+
+// What issue 12 asks of the robot's map: every table of the scene, within 5 cm and 5 degrees.
+const crunch::MatchTolerance kTableTolerance{0.05, 5.0 * crunch::kPi / 180.0};
+
+// How long the robot roams in each scene before its map must hold every table. The body whisk's
+// fixed roaming (forward, whisk on contact, random turn) first mapped the one table after 19
+// whisks, ~270 s; in 450 s in the two-table room it touched 2 legs of one table and 1 of the
+// other and mapped neither (docs/ROBOT.md, "Maps in the virtual robot"). So these runs are
+// hidden from ctest ([.]: minutes of wall clock each, and the two-table one fails today) until
+// exploration chooses where to touch (issue 14); run them with
+//   build/default/test/hil/robot_hil_test "[hil-map]"
+constexpr int kOneTableSeconds = 330;
+constexpr int kTwoTablesSeconds = 450;
+
+crunch::Map readMap(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  auto map = crunch::parseMapJson(ss.str(), path.string());
+  REQUIRE(map);
+  return map.value();
+}
+
+// Every table of `scene` is in `map` (one-to-one, within kTableTolerance).
+void checkEveryTableFound(const crunch::Map& map, const crunch::Scene& scene) {
+  const crunch::Evaluation ev = crunch::evaluate(map, scene, kTableTolerance);
+  std::cout << "hil: " << ev.true_tables << " true tables, " << ev.fused_tables
+            << " fused; within 5 cm and 5 deg: " << ev.matched << " (recall " << ev.recall
+            << ", precision " << ev.precision << ", mean error " << ev.mean_position_error
+            << " m, " << ev.mean_angle_error * 180.0 / crunch::kPi << " deg)" << std::endl;
+  for (const crunch::MapTable& t : map.tables) {
+    std::cout << "hil: fused table (" << t.pose.x << ", " << t.pose.y << ", " << t.pose.theta << ") score "
+              << t.score << std::endl;
+  }
+  CHECK(ev.matched == ev.true_tables);
+}
+
+// --replay of the run's recording gives the same map and shapelets.
+void checkReplaySameMap(const fs::path& live, const fs::path& again) {
+  const Run rp = run(std::string(CRUNCHHOST) + " --replay " + (live / "recording.crec").string() +
+                     " --out " + again.string());
+  INFO(rp.output);
+  REQUIRE(rp.exit_code == 0);
+  const json a = readJson(live / "map.json"), b = readJson(again / "map.json");
+  CHECK(a["tables"] == b["tables"]);
+  CHECK(a["per_pose"] == b["per_pose"]);
+  CHECK(a["stats"]["shapelets"] == b["stats"]["shapelets"]);
+  CHECK(a["stats"]["proposals"] == b["stats"]["proposals"]);
+  CHECK(readJson(again / "report.json")["shapelets"] == readJson(live / "report.json")["shapelets"]);
+}
 
 }  // namespace
 
@@ -151,7 +209,7 @@ TEST_CASE("Robot: the virtual robot maps by touch, --replay gives the same map, 
   CHECK(rep["contacts"]["whisks"].get<int>() >= 2);
   const auto shapelets = rep["shapelets"];
   REQUIRE(shapelets.size() >= 4);
-  auto scene = crunch::loadScene(kScene);
+  auto scene = crunch::loadScene(kOneTable.path);
   REQUIRE(scene);
   std::vector<double> dist;
   for (const json& s : shapelets) {
@@ -164,27 +222,14 @@ TEST_CASE("Robot: the virtual robot maps by touch, --replay gives the same map, 
   CHECK(median < 0.05);
   CHECK(dist.back() < 0.20);
 
-  auto live_map = crunch::parseMapJson(
-      [&] { std::ifstream in(out / "map.json"); std::stringstream ss; ss << in.rdbuf(); return ss.str(); }(),
-      "map.json");
-  REQUIRE(live_map);
   CHECK(fs::file_size(out / "map.png") > 1000);
-  const crunch::Evaluation ev = crunch::evaluate(live_map.value(), scene.value());
+  const crunch::Evaluation ev = crunch::evaluate(readMap(out / "map.json"), scene.value());
   std::cout << "hil: fused tables " << ev.fused_tables << ", recall " << ev.recall
             << ", precision " << ev.precision << std::endl;
 
   // --replay: the same records through the same path give the same map.
   const fs::path rec = out / "recording.crec";
-  const fs::path again = dir.path() / "replay";
-  const Run rp = run(std::string(CRUNCHHOST) + " --replay " + rec.string() + " --out " + again.string());
-  INFO(rp.output);
-  REQUIRE(rp.exit_code == 0);
-  const json a = readJson(out / "map.json"), b = readJson(again / "map.json");
-  CHECK(a["tables"] == b["tables"]);
-  CHECK(a["per_pose"] == b["per_pose"]);
-  CHECK(a["stats"]["shapelets"] == b["stats"]["shapelets"]);
-  CHECK(a["stats"]["proposals"] == b["stats"]["proposals"]);
-  CHECK(readJson(again / "report.json")["shapelets"] == shapelets);
+  checkReplaySameMap(out, dir.path() / "replay");
 
   // A recording cut short (a run killed while writing): replayed up to the cut, reported, exit 3.
   const fs::path cut = dir.path() / "cut.crec";
@@ -201,6 +246,39 @@ TEST_CASE("Robot: the virtual robot maps by touch, --replay gives the same map, 
   CHECK(pr["records"].get<long>() > 1000);
   CHECK(pr["bridge"]["frames"].get<long>() < rep["bridge"]["frames"].get<long>());
   CHECK(fs::exists(partial / "map.json"));
+}
+
+// `crunchhost --robot` roams `scene` for `seconds`; its map holds every table within 5 cm and
+// 5 degrees, and --replay of its recording gives the same map.
+void mapsEveryTable(const HilScene& hil, int seconds) {
+  if (realHardware()) {  // the real room is not this scene
+    WARN("hil: real devices: the scene needs the virtual robot; not run");
+    return;
+  }
+  TempDir dir;
+  const fs::path out = dir.path() / "live";
+  const Run r = virtualRobot(
+      "", "--duration " + std::to_string(seconds) + " --map-every 5 --out " + out.string(), hil,
+      3 * seconds);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  auto scene = crunch::loadScene(hil.path);
+  REQUIRE(scene);
+  REQUIRE(!scene.value().tables.empty());
+  checkEveryTableFound(readMap(out / "map.json"), scene.value());
+  checkReplaySameMap(out, dir.path() / "replay");
+}
+
+TEST_CASE("Robot: the virtual robot maps the table of hil_one_table within 5 cm and 5 deg; "
+          "--replay gives the same map",
+          "[.][hil-map]") {
+  mapsEveryTable(kOneTable, kOneTableSeconds);
+}
+
+TEST_CASE("Robot: the virtual robot maps both tables of hil_two_tables within 5 cm and 5 deg; "
+          "--replay gives the same map",
+          "[.][hil-map]") {
+  mapsEveryTable(kTwoTables, kTwoTablesSeconds);
 }
 
 TEST_CASE("Robot: the bridge unplugged mid-run stops the robot, keeps the map and resumes",

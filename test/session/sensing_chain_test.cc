@@ -131,6 +131,45 @@ TEST_CASE("SensingChain: each sample carries the pose given with the bytes that 
   CHECK(c.poseAtSample(500).x == poseOfTick(2000).x);
 }
 
+TEST_CASE("SensingChain: timed samples wait for their pose; live detectors do not wait",
+          "[session]") {
+  auto chain = SensingChain::create(chainOptions({0.5, 0.5, 0.0}));
+  REQUIRE(chain);
+  SensingChain& c = *chain.value();
+  // The pose source: x is the time asked for, in milliseconds.
+  std::vector<std::uint64_t> asked;
+  auto pose_at = [&](std::uint64_t t_ns) {
+    asked.push_back(t_ns);
+    return Pose2{static_cast<double>(t_ns) / 1e6, 0.0, 0.0};
+  };
+  // 3000 ticks (1.5 s), four ticks per chunk, the chunk stamped when its last sample completed.
+  for (std::uint32_t t = 0; t < 3000; t += 4) {
+    std::vector<std::uint8_t> bytes;
+    for (std::uint32_t k = t; k < t + 4; ++k) {
+      const auto b = tickBytes(k);
+      bytes.insert(bytes.end(), b.begin(), b.end());
+    }
+    c.feedTimed(bytes, (t + 3) * 500000ull + 7, pose_at);
+  }
+  CHECK(c.queued() == 3000);
+  CHECK(c.counts().samples == 0);  // nothing went through the pipeline
+  CHECK(asked.empty());
+  CHECK(c.liveCalibrated());  // the live detectors saw every sample (1 s of rest calibrates)
+  CHECK_FALSE(c.calibrated());
+  // Up to 1 s: samples 0 .. 2000, each stamped 500 us after the one before.
+  c.release(1000000007ull, pose_at);
+  CHECK(c.counts().samples == 2001);
+  CHECK(c.queued() == 999);
+  REQUIRE(asked.size() == 2001);
+  for (std::size_t i = 0; i < asked.size(); i += 97) CHECK(asked[i] == i * 500000ull + 7);
+  CHECK(c.poseAtSample(1000).x == Approx(500.000007));
+  CHECK_FALSE(c.calibrated());  // settling and 1 s of rest: 2200 samples
+  c.release(~0ull, pose_at);
+  CHECK(c.queued() == 0);
+  CHECK(c.counts().samples == 3000);
+  CHECK(c.calibrated());
+}
+
 TEST_CASE("SensingChain: a board's missing frame is filled, the 2 kHz time base kept",
           "[session]") {
   auto chain = SensingChain::create(chainOptions());

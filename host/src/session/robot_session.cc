@@ -1,5 +1,6 @@
 #include "crunch/session/robot_session.h"
 
+#include <limits>
 #include <utility>
 
 #include "crunch/core/range_check.h"
@@ -50,6 +51,36 @@ RobotSession::RobotSession(const RobotSessionOptions& options, std::unique_ptr<S
 
 Pose2 RobotSession::pose() const { return compose(options_.start, tracker_.odometry()); }
 
+std::uint64_t RobotSession::settledUntil() const {
+  // No odometry yet: the robot has not moved (it moves only after the Create answered).
+  return track_.empty() ? std::numeric_limits<std::uint64_t>::max() : track_.settledUntil();
+}
+
+Pose2 RobotSession::poseAt(std::uint64_t t_ns) const {
+  if (track_.empty()) return pose();
+  return compose(options_.start, track_.poseAt(t_ns));
+}
+
+void RobotSession::feedCreate(const io::Chunk& chunk) {
+  // Byte by byte, so that every packet's odometry is seen (a chunk may hold several). The
+  // packets of one chunk arrived together; the Create sent them one stream period apart.
+  std::size_t found = 0;
+  const auto bytes = chunk.data();
+  for (std::size_t i = 0; i < bytes.size(); ++i) {
+    const std::uint64_t before = tracker_.packets();
+    tracker_.feed(bytes.subspan(i, 1));
+    if (tracker_.packets() != before && found < packet_totals_.size()) {
+      packet_totals_[found] = tracker_.odometryState().totalAngleDeg();
+      packet_poses_[found] = tracker_.odometry();
+      ++found;
+    }
+  }
+  for (std::size_t k = 0; k < found; ++k) {
+    const std::uint64_t back = static_cast<std::uint64_t>(found - 1 - k) * kStreamPeriodNs;
+    track_.add(chunk.t_ns > back ? chunk.t_ns - back : 0, packet_totals_[k], packet_poses_[k]);
+  }
+}
+
 void RobotSession::syncCounts() {
   const SensingCounts& c = chain_->counts();
   counts_.samples = c.samples;
@@ -64,17 +95,24 @@ Status RobotSession::handle(const io::Chunk& chunk) {
     if (auto s = recorder_->write(chunk); !s) return s;
   }
   switch (chunk.stream) {
-    case io::StreamId::kBridge:
+    case io::StreamId::kBridge: {
       ++counts_.bridge_chunks;
-      // Every sample these bytes complete is stamped with the odometry now.
-      chain_->feed(chunk.data(), pose());
+      // The samples these bytes complete wait for the odometry of their moment.
+      auto pose_at = [this](std::uint64_t t) { return poseAt(t); };
+      chain_->feedTimed(chunk.data(), chunk.t_ns, pose_at);
+      chain_->release(settledUntil(), pose_at);
       break;
+    }
     case io::StreamId::kCreate:
       ++counts_.create_chunks;
-      tracker_.feed(chunk.data());
+      feedCreate(chunk);
+      chain_->release(settledUntil(), [this](std::uint64_t t) { return poseAt(t); });
       break;
     case io::StreamId::kMark:
       ++counts_.marks;
+      // Whatever was sensed before the mark belongs before it: the samples up to its time go
+      // through with the best pose known now (odometry_track.h).
+      chain_->release(chunk.t_ns, [this](std::uint64_t t) { return poseAt(t); });
       if (chunk.size >= 1) {
         if (chunk.bytes[0] == static_cast<std::uint8_t>(io::MarkKind::kWhiskStart)) {
           chain_->beginWhisk();
@@ -110,6 +148,8 @@ Status RobotSession::bridgeReconnected(std::uint64_t t_ns) {
 }
 
 Map RobotSession::finish() {
+  chain_->release(std::numeric_limits<std::uint64_t>::max(),
+                  [this](std::uint64_t t) { return poseAt(t); });
   closeWhisk();
   return mapper_.finish();
 }

@@ -31,7 +31,13 @@ SensingChain::SensingChain(const SensingChainOptions& options, signal::SignalPip
     : pipeline_(std::move(pipeline)),
       evidence_(options.mounts, options.beam),
       pose_history_(kPoseHistory, options.start),
+      queue_(kQueueSamples),
+      live_{signal::ContactDetector(options.pipeline.detector),
+            signal::ContactDetector(options.pipeline.detector),
+            signal::ContactDetector(options.pipeline.detector),
+            signal::ContactDetector(options.pipeline.detector)},
       free_pose_(options.start) {
+  static_assert(signal::kWhiskers == 4, "live_ is initialised for four whiskers");
   evidence_.begin();
 }
 
@@ -41,6 +47,22 @@ std::uint32_t SensingChain::contactMask() const {
     if (pipeline_.detector(w).inContact()) mask |= 1u << w;
   }
   return mask;
+}
+
+std::uint32_t SensingChain::liveContactMask() const {
+  std::uint32_t mask = 0;
+  for (int w = 0; w < signal::kWhiskers; ++w) {
+    if (live_[static_cast<std::size_t>(w)].inContact()) mask |= 1u << w;
+  }
+  return mask;
+}
+
+bool SensingChain::liveCalibrated() const {
+  for (const signal::ContactDetector& d : live_) {
+    const signal::DetectorState s = d.state();
+    if (s != signal::DetectorState::kQuiet && s != signal::DetectorState::kContact) return false;
+  }
+  return true;
 }
 
 std::uint32_t SensingChain::unreadyMask() const {

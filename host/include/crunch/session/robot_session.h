@@ -24,9 +24,12 @@
 // turns) are counted (RobotSessionCounts::roaming_episodes) and not reported: the radial model
 // was trained on sweeps, not on pushes. Rays swept free count at all times (negative evidence).
 //
-// Poses: the map frame is the one the robot started in, placed at Options::start; the pose of a
-// pipeline sample is the odometry when its bridge chunk was handled (the Create streams every
-// 15 ms; at the whisk's pi/24 rad/s that is 0.1 degrees).
+// Poses: the map frame is the one the robot started in, placed at Options::start. Each pipeline
+// sample gets the odometry of its own moment: the samples wait in the chain's queue
+// (SensingChain::feedTimed) until the Create's packets after them have arrived, and take the
+// pose OdometryTrack interpolates between the packets' whole-degree steps (odometry_track.h;
+// the chunks' arrival times, t_ns, are the clock). A mark first releases the samples up to its
+// time. The behaviour acts on the chain's live detectors (contactMask()), which do not wait.
 //
 // Ownership: owns every stage; the recorder, if set, is not owned. Thread-safety: none; the
 // control loop (or the replay) owns a session. Allocation: handle() of bridge and Create chunks
@@ -34,6 +37,7 @@
 // whisk's end allocates the mapper's new shapelets and per-pose MAP.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -44,6 +48,7 @@
 #include "crunch/io/recording.h"
 #include "crunch/io/sample_assembler.h"
 #include "crunch/mapping/mapper.h"
+#include "crunch/session/odometry_track.h"
 #include "crunch/session/sensing_chain.h"
 #include "crunch/session/whisk_evidence.h"
 #include "crunch/signal/pipeline.h"
@@ -94,13 +99,18 @@ class RobotSession {
   // Every chunk handled from now on is recorded first (nullptr: none).
   void setRecorder(io::RecordingWriter* recorder) { recorder_ = recorder; }
 
-  // Bit w set while whisker w's detector is in contact (what the behaviour acts on).
-  std::uint32_t contactMask() const { return chain_->contactMask(); }
+  // Bit w set while whisker w's detector is in contact (what the behaviour acts on: the chain's
+  // live detectors, not waiting for the pose).
+  std::uint32_t contactMask() const { return chain_->liveContactMask(); }
   // The odometry pose in the map frame.
   Pose2 pose() const;
   bool bumped() const { return tracker_.bumped(); }
   // The pipeline's detectors have calibrated their rest (the robot may move).
-  bool calibrated() const { return chain_->calibrated(); }
+  bool calibrated() const { return chain_->liveCalibrated(); }
+  // The odometry pose at t_ns (CLOCK_MONOTONIC, as the chunks' t_ns), map frame, interpolated
+  // between the Create's packets (odometry_track.h); the pose now before any packet.
+  Pose2 poseAt(std::uint64_t t_ns) const;
+  const OdometryTrack& track() const { return track_; }
 
   // The map so far (no random draws) and the final one (call once, after the last chunk: ends
   // an open whisk first).
@@ -124,11 +134,18 @@ class RobotSession {
   Status mark(io::MarkKind kind, std::uint64_t t_ns);
   void closeWhisk();
   void syncCounts();
+  void feedCreate(const io::Chunk& chunk);
+  std::uint64_t settledUntil() const;
+
+  static constexpr std::uint64_t kStreamPeriodNs = 15000000;  // the Create's stream, 15 ms
 
   RobotSessionOptions options_;
   io::RecordingWriter* recorder_ = nullptr;
   std::unique_ptr<SensingChain> chain_;
   io::oi::SensorTracker tracker_;
+  OdometryTrack track_;
+  std::array<std::int64_t, 64> packet_totals_{};  // one Create chunk's packets (feedCreate)
+  std::array<Pose2, 64> packet_poses_{};
   Mapper mapper_;
   std::vector<ContactReport> reports_;
   std::vector<FreeRay> free_rays_;

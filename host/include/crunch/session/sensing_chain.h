@@ -13,7 +13,10 @@
 // the odometry integrated from the Create's OI bytes; the simulator: its exact pose, §2.8). Every
 // pipeline sample that a feed() completes is stamped with the pose given with those bytes, and
 // kept in a ring of kPoseHistory samples, from which the reports take the pose at an episode's
-// first contact and at each whisker's peak (WhiskEvidence::take).
+// first contact and at each whisker's peak (WhiskEvidence::take). A pose source that knows a
+// moment's pose only later (the robot's odometry, between the Create's packets) uses
+// feedTimed() / release() instead: samples wait in a queue with their time, the behaviour's
+// contact mask comes from live detectors that do not wait.
 //
 // Which contacts are reported: the episodes that end while a whisk is open (beginWhisk() ..
 // endWhisk()) — the body whisk's own, including the episode of the contact that started it,
@@ -30,10 +33,12 @@
 // next whisk.
 //
 // Ownership: owns every stage. Thread-safety: none; one control loop (or replay, or simulator
-// thread) owns a chain. Allocation: create() allocates the pose history; feed() allocates nothing
+// thread) owns a chain. Allocation: create() allocates the pose history and the timed queue; feed() allocates nothing
 // once warm (the evidence's buffers have grown to a whisk's worth after the first whisks).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -99,6 +104,45 @@ class SensingChain {
     feed(bytes, pose, [](const signal::ContactEpisode&) {});
   }
 
+  // Timed feeding, for a pose source that knows a moment's pose only later (RobotSession: the
+  // odometry between the Create's packets, session/odometry_track.h). Decodes `bytes`, which
+  // arrived at t_ns, and queues each sample they complete with its time: the last one t_ns, each
+  // earlier one a sample period (500 us) before the next. The samples go through the live
+  // detectors at once (liveContactMask(), liveCalibrated(): what the behaviour acts on, with no
+  // delay) and through the pipeline only at release(), with their pose then. A full queue
+  // (kQueueSamples, 2 s) releases its oldest sample with pose_at(t) as it is.
+  template <typename PoseAt>
+  void feedTimed(std::span<const std::uint8_t> bytes, std::uint64_t t_ns, PoseAt&& pose_at) {
+    std::size_t added = 0;
+    decoder_.feed(bytes, [&](const io::DecodedFrame& d) {
+      assembler_.push(d, [&](const signal::SampleFrame& f) {
+        for (int w = 0; w < signal::kWhiskers; ++w) live_[static_cast<std::size_t>(w)].push(f[w]);
+        if (queued_ == kQueueSamples) releaseOne(pose_at);
+        queue_[(queue_first_ + queued_) % kQueueSamples] = {f, 0};
+        ++queued_;
+        ++added;
+      });
+    });
+    // Stamp this chunk's samples: 500 us apart, the last one at t_ns.
+    added = std::min(added, queued_);
+    for (std::size_t k = 0; k < added; ++k) {
+      const std::uint64_t back = static_cast<std::uint64_t>(added - 1 - k) * kSamplePeriodNs;
+      queue_[(queue_first_ + queued_ - added + k) % kQueueSamples].t_ns =
+          t_ns > back ? t_ns - back : 0;
+    }
+  }
+  // Passes every queued sample stamped at or before until_ns, oldest first, to the pipeline with
+  // the pose pose_at(t) (as feed() does with its pose).
+  template <typename PoseAt>
+  void release(std::uint64_t until_ns, PoseAt&& pose_at) {
+    while (queued_ > 0 && queue_[queue_first_].t_ns <= until_ns) releaseOne(pose_at);
+  }
+  // Samples queued for their pose.
+  std::size_t queued() const { return queued_; }
+  // The live detectors (timed feeding only): bit w set while whisker w touches; all calibrated.
+  std::uint32_t liveContactMask() const;
+  bool liveCalibrated() const;
+
   // Opens a whisk: forgets the reports taken so far (contacts that were not this whisk's), keeps
   // the negative-evidence samples and the episode in progress.
   void beginWhisk();
@@ -138,12 +182,29 @@ class SensingChain {
   // episode it ended (already taken or counted), or nullptr.
   const signal::ContactEpisode* onSample(const signal::SampleFrame& frame, const Pose2& pose);
   void takeEpisode(const signal::ContactEpisode& episode);
+  template <typename PoseAt>
+  void releaseOne(PoseAt& pose_at) {
+    const Queued& q = queue_[queue_first_];
+    (void)onSample(q.frame, pose_at(q.t_ns));
+    queue_first_ = (queue_first_ + 1) % kQueueSamples;
+    --queued_;
+  }
+
+  static constexpr std::size_t kQueueSamples = 4096;
+  static constexpr std::uint64_t kSamplePeriodNs = 500000;
+  struct Queued {
+    signal::SampleFrame frame;
+    std::uint64_t t_ns = 0;
+  };
 
   io::BridgeStreamDecoder decoder_;
   io::SampleAssembler assembler_;
   signal::SignalPipeline pipeline_;
   WhiskEvidence evidence_;
   std::vector<Pose2> pose_history_;  // ring: the pose of pipeline sample i at i % kPoseHistory
+  std::vector<Queued> queue_;        // timed feeding: samples waiting for their pose (a ring)
+  std::size_t queue_first_ = 0, queued_ = 0;
+  std::array<signal::ContactDetector, signal::kWhiskers> live_;  // timed feeding's own detectors
   Pose2 free_pose_;                  // the negative-evidence sample being accumulated
   std::uint32_t free_mask_ = 0;
   bool in_whisk_ = false;
