@@ -140,8 +140,10 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   MappingOptions mopt = o.mapping;
   mopt.seed = o.seed;
   mopt.model = withSensorNoise(mopt.model, run.noise);
-  // The located chain tells a wall's face from a leg's (ContactReport::face_span): its chains'
-  // tables can compete in the posterior (ChainFusion::kPool). The classifiers' cannot.
+  // The located chain, whisking in place at every pose, meets a wall with two whiskers and
+  // tells its face from a leg's (ContactReport::face_span): its chains' tables can compete in
+  // the posterior (ChainFusion::kPool). The classifiers' cannot; nor can the roaming robot's
+  // single-whisker touches of walls (the session keeps the vote: docs/BLACKBOARD.md).
   mopt.chain_fusion = physics ? ChainFusion::kPool : ChainFusion::kVote;
   std::optional<SnapshotRecorder> recorder;
   if (o.snapshot_pose) {

@@ -16,6 +16,22 @@ using nlohmann::ordered_json;
 
 constexpr double kDeg = 180.0 / kPi;
 
+// One bar per whisker (x = 1..4, 5 = all together) shifted by `offset`, drawn as thick lines.
+ChartSeries barSeries(const std::string& label, ChartColour colour, double offset,
+                      const std::array<double, 5>& values, double line_width) {
+  ChartSeries s;
+  s.label = label;
+  s.style = SeriesStyle::kLine;
+  s.colour = colour;
+  s.line_width = line_width;
+  for (int i = 0; i < 5; ++i) {
+    const double x = i + 1 + offset;
+    s.x.insert(s.x.end(), {x, x, NAN});
+    s.y.insert(s.y.end(), {0.0, values[static_cast<size_t>(i)], NAN});
+  }
+  return s;
+}
+
 ordered_json facesJson(const FaceEvaluation& f);
 
 ordered_json lineJson(const signal::RadialLine& l) {
@@ -424,17 +440,7 @@ Chart table1Chart(const RadialEvaluation& protocol, const RadialEvaluation& firs
   c.options.legend = LegendPosition::kTopLeft;
   auto bars = [](const std::string& label, ChartColour colour, double offset,
                  const std::array<double, 5>& values) {
-    ChartSeries s;
-    s.label = label;
-    s.style = SeriesStyle::kLine;
-    s.colour = colour;
-    s.line_width = 16.0;
-    for (int i = 0; i < 5; ++i) {
-      const double x = i + 1 + offset;
-      s.x.insert(s.x.end(), {x, x, NAN});
-      s.y.insert(s.y.end(), {0.0, values[static_cast<size_t>(i)], NAN});
-    }
-    return s;
+    return barSeries(label, colour, offset, values, 16.0);
   };
   std::array<double, 5> paper{}, ours{}, ours_first{};
   for (int w = 0; w < 4; ++w) {
@@ -609,17 +615,7 @@ Chart table1RampChart(const TrainingFit& fit) {
   c.options.legend = LegendPosition::kTopLeft;
   auto bars = [](const std::string& label, ChartColour colour, double offset,
                  const std::array<double, 5>& values) {
-    ChartSeries s;
-    s.label = label;
-    s.style = SeriesStyle::kLine;
-    s.colour = colour;
-    s.line_width = 11.0;
-    for (int i = 0; i < 5; ++i) {
-      const double x = i + 1 + offset;
-      s.x.insert(s.x.end(), {x, x, NAN});
-      s.y.insert(s.y.end(), {0.0, values[static_cast<size_t>(i)], NAN});
-    }
-    return s;
+    return barSeries(label, colour, offset, values, 11.0);
   };
   auto mm = [](const ErrorStats& e) {
     std::array<double, 5> v{};

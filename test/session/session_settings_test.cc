@@ -33,6 +33,7 @@ session::RobotSessionOptions unusualOptions() {
   m.fuse.min_support = 2;
   m.global_sweeps = 5;
   m.global_chains = 3;
+  m.chain_fusion = ChainFusion::kPool;  // not the session's default (the vote)
   session::RobotSessionOptions s = session::sessionOptions(shippedModels(), m, 42);
   s.start = {0.3, 0.775, -0.25};
   s.area_lo = {0.0, 0.0};
@@ -83,7 +84,7 @@ TEST_CASE("Session settings: metadata written and read back gives the same optio
   CHECK(s.mapping.fuse.min_support == 2);
   CHECK(s.mapping.global_sweeps == 5);
   CHECK(s.mapping.global_chains == 3);
-  CHECK(s.mapping.chain_fusion == ChainFusion::kPool);  // the robot's chain locates contacts
+  CHECK(s.mapping.chain_fusion == ChainFusion::kPool);
   CHECK(s.mapping.model.sigma_r_shapelet == want.mapping.model.sigma_r_shapelet);
   CHECK(s.mapping.model.sigma_theta_shapelet == want.mapping.model.sigma_theta_shapelet);
   CHECK(s.mounts.size() == want.mounts.size());

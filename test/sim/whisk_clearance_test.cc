@@ -114,8 +114,17 @@ TEST_CASE("WhiskClearance: agrees with a brute-force sweep on the default arena'
   const auto mounts = defaultWhiskerArray();
   const std::vector<Pose2> poses = world->reachablePoses(scene.poses, nullptr);
   const double margin = 0.01;
-  int clear = 0, near = 0;
-  for (const Pose2& pose : poses) {
+  // Under AddressSanitizer the brute force runs ~500 times slower (614 s for every pose): there
+  // every 8th pose is checked, the same way; the Release build checks them all.
+#if defined(__SANITIZE_ADDRESS__)
+  constexpr std::size_t kStride = 8;
+#else
+  constexpr std::size_t kStride = 1;
+#endif
+  int clear = 0, near = 0, checked = 0;
+  for (std::size_t k = 0; k < poses.size(); k += kStride) {
+    const Pose2& pose = poses[k];
+    ++checked;
     const double d = sweptDistance(*world, mounts, pose, -kA, kA, 400);
     const bool c = inPlaceWhiskClear(*world, mounts, pose, -kA, kA, margin);
     clear += c;
@@ -126,8 +135,8 @@ TEST_CASE("WhiskClearance: agrees with a brute-force sweep on the default arena'
     near += d <= 1.25 * margin + 2e-4 && d > margin;
   }
   // Most of the grid is open floor; the rest whisks at a leg or a wall.
-  CHECK(clear > static_cast<int>(poses.size()) / 2);
-  CHECK(clear < static_cast<int>(poses.size()));
+  CHECK(clear > checked / 2);
+  CHECK(clear < checked);
   INFO(near << " poses in the conservative band");
 }
 

@@ -100,9 +100,6 @@ RobotSessionOptions sessionOptions(const signal::SignalModels& models,
   s.mapping.seed = seed;
   s.mapping.progress = nullptr;
   s.mapping.model = withSensorNoise(s.mapping.model, NoiseRegime::classifiers());
-  // The robot's chain locates contacts and tells faces from legs (sim_run.cc does the same for
-  // the physics sensor).
-  s.mapping.chain_fusion = ChainFusion::kPool;
   return s;
 }
 
