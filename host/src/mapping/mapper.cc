@@ -11,6 +11,20 @@ namespace {
 // "longer-term memories of shapelets", §4): a blackboard whose working memory holds them all,
 // annealed with the same schedule and `global_sweeps` sweeps per temperature. The spatial hash
 // keeps each move local, so the cost grows with the number of shapelets, not its square.
+// Puts every shapelet of the run and the negative evidence on `board` (the global inference's
+// working memory holds them all).
+void holdWholeRun(Blackboard& board, const Map& map, const FreeSpaceGrid* free) {
+  for (const Shapelet& s : map.shapelets) board.pushShapelet(s);
+  board.setFreeSpace(free);
+}
+
+// The sampler's options with the global inference's sweeps per temperature.
+SamplerOptions globalSampler(const MappingOptions& options) {
+  SamplerOptions so = options.sampler;
+  so.sweeps_per_temperature = options.global_sweeps;
+  return so;
+}
+
 std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
                                 const FreeSpaceGrid* free, Rng& rng) {
   // Independent chains from the same evidence. The log joint cannot pick among them: it grows
@@ -23,11 +37,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
   for (PoseMap& chain : chains) {
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 64);
-    for (const Shapelet& s : map.shapelets) board.pushShapelet(s);
-    board.setFreeSpace(free);
-    SamplerOptions so = options.sampler;
-    so.sweeps_per_temperature = options.global_sweeps;
-    Sampler sampler(board, so, rng);
+    holdWholeRun(board, map, free);
+    Sampler sampler(board, globalSampler(options), rng);
     sampler.anneal();
     map.stats.proposals += sampler.stats().proposals;
     map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, board.liveTables());
@@ -45,8 +56,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     // support dies, two overlapping tables cannot both stay: eq. 25).
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 8 * poses.size() + 64);
-    for (const Shapelet& s : map.shapelets) board.pushShapelet(s);
-    board.setFreeSpace(free);
+    holdWholeRun(board, map, free);
     for (const Pose2& p : poses) {
       const int32_t id = board.addTable(p);
       for (int c = 0; c < 4; ++c) {
@@ -54,8 +64,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
         board.addLeg({at.x(), at.y(), wrapPeriod(p.theta, kPi / 2)}, id);
       }
     }
-    SamplerOptions so = options.sampler;
-    so.sweeps_per_temperature = options.global_sweeps;
+    SamplerOptions so = globalSampler(options);
     so.schedule_steps = options.pool_steps;  // beta_i for i < pool_steps: the coldest
     Sampler sampler(board, so, rng);
     sampler.anneal();
