@@ -169,6 +169,17 @@ TEST_CASE("Shapelet: toShapelet rejects non-finite and out-of-range reports", "[
   rep = good;
   rep.robot.theta = nan;
   CHECK(rejected(rep));
+  // A face's length must be a length: finite and not negative; it is carried to the shapelet.
+  for (const double span : {nan, inf, -0.01}) {
+    rep = good;
+    rep.face_span = span;
+    CHECK(rejected(rep));
+  }
+  rep = good;
+  rep.face_span = 0.2;
+  Shapelet carried;
+  REQUIRE(crunch::toShapelet(rep, mounts, 7, carried));
+  CHECK(carried.face_span == 0.2);
   // r is a measurement only within [-length, 2 length].
   const double length = mounts[1].length;
   REQUIRE(length == Approx(0.14));
