@@ -112,6 +112,16 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
                  "fused map by one annealing over all shapelets (sweeps per temperature; 0: "
                  "cluster the per-pose MAPs)")
       ->capture_default_str();
+  app.add_option_function<std::string>(
+         "--model",
+         [&opt](const std::string& name) {
+           const auto model = crunch::objectModelByName(name);
+           if (!model) throw CLI::ValidationError("--model", model.error().message);
+           opt.mapping.model.objects = model.value();
+         },
+         "objects the map may hold: paper (one table size, no walls; the paper's figures) | "
+         "rooms (walls, four-legged objects of any size)")
+      ->default_str("paper");
   app.add_option("--global-chains", opt.mapping.global_chains,
                  "independent chains of the global inference; a table needs half to agree")
       ->capture_default_str();

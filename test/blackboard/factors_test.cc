@@ -113,3 +113,15 @@ TEST_CASE("Factors: a face known to be longer than a leg's diagonal is no leg's 
   const std::vector<double> k = {logShapeletKernel(leg, s, p)};
   CHECK(logShapeletDensity(k, p) == Approx(std::log(p.c_S)).epsilon(kTight));
 }
+
+TEST_CASE("Params: the object model by name (--model, recordings)", "[blackboard]") {
+  CHECK(objectModelByName("paper").value() == ObjectModel::kPaper);
+  CHECK(objectModelByName("rooms").value() == ObjectModel::kRooms);
+  const auto bad = objectModelByName("Rooms");
+  REQUIRE_FALSE(bad);
+  CHECK(bad.error().message.find("'Rooms'") != std::string::npos);
+  CHECK(bad.error().message.find("paper | rooms") != std::string::npos);
+  CHECK(std::string(objectModelName(ObjectModel::kRooms)) == "rooms");
+  CHECK(std::string(objectModelName(ObjectModel::kPaper)) == "paper");
+  CHECK(ModelParams{}.objects == ObjectModel::kPaper);
+}

@@ -34,6 +34,7 @@ session::RobotSessionOptions unusualOptions() {
   m.global_sweeps = 5;
   m.global_chains = 3;
   m.chain_fusion = ChainFusion::kPool;  // not the session's default (the vote)
+  m.model.objects = ObjectModel::kRooms;  // not the default (the paper's)
   session::RobotSessionOptions s = session::sessionOptions(shippedModels(), m, 42);
   s.start = {0.3, 0.775, -0.25};
   s.area_lo = {0.0, 0.0};
@@ -85,6 +86,7 @@ TEST_CASE("Session settings: metadata written and read back gives the same optio
   CHECK(s.mapping.global_sweeps == 5);
   CHECK(s.mapping.global_chains == 3);
   CHECK(s.mapping.chain_fusion == ChainFusion::kPool);
+  CHECK(s.mapping.model.objects == ObjectModel::kRooms);
   CHECK(s.mapping.model.sigma_r_shapelet == want.mapping.model.sigma_r_shapelet);
   CHECK(s.mapping.model.sigma_theta_shapelet == want.mapping.model.sigma_theta_shapelet);
   CHECK(s.mounts.size() == want.mounts.size());
@@ -105,8 +107,9 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
        {"seed", "start", "area", "checksum_includes_header", "onset_threshold", "mapping"}) {
     CHECK(st.contains(key));
   }
-  CHECK(st["mapping"].size() == 11);
+  CHECK(st["mapping"].size() == 12);
   CHECK(st["mapping"]["chain_fusion"] == "pool");
+  CHECK(st["mapping"]["model"] == "rooms");
 }
 
 TEST_CASE("Session settings: a bad value in the metadata is an error naming the field",
@@ -157,6 +160,19 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
               .find("settings.mapping.chain_fusion") != std::string::npos);
     CHECK(errorOf(withSetting(good, "mapping.chain_fusion", 1))
               .find("settings.mapping.chain_fusion") != std::string::npos);
+  }
+  SECTION("a recording from before the object model was recorded used the paper's") {
+    json meta = json::parse(good);
+    meta["settings"]["mapping"].erase("model");
+    auto got = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(got);
+    CHECK(got.value().mapping.model.objects == ObjectModel::kPaper);
+  }
+  SECTION("an object model that is neither paper nor rooms") {
+    CHECK(errorOf(withSetting(good, "mapping.model", "chairs"))
+              .find("settings.mapping.model") != std::string::npos);
+    CHECK(errorOf(withSetting(good, "mapping.model", 2))
+              .find("settings.mapping.model") != std::string::npos);
   }
   SECTION("an unknown setting (it could change the map)") {
     CHECK(errorOf(withSetting(good, "mapping.negative_evidence", false))

@@ -4,6 +4,14 @@
 
 namespace crunch {
 
+Result<ObjectModel> objectModelByName(const std::string& name) {
+  if (name == "paper") return ObjectModel::kPaper;
+  if (name == "rooms") return ObjectModel::kRooms;
+  return Error{"model: unknown object model '" + name + "' (paper | rooms)"};
+}
+
+const char* objectModelName(ObjectModel m) { return m == ObjectModel::kRooms ? "rooms" : "paper"; }
+
 Status ModelParams::validate() const {
   const Status checks[] = {
       checkAbove("c_T", c_T, 0.0, 1e6),

@@ -35,7 +35,8 @@ nlohmann::ordered_json mapCountsJson(const Map& map) {
 }
 
 nlohmann::ordered_json modelJson(const ModelParams& model) {
-  return {{"sigma_r_shapelet", model.sigma_r_shapelet},
+  return {{"objects", objectModelName(model.objects)},
+          {"sigma_r_shapelet", model.sigma_r_shapelet},
           {"sigma_theta_shapelet", model.sigma_theta_shapelet},
           {"sigma_r_leg", model.sigma_r_leg},
           {"sigma_theta_leg", model.sigma_theta_leg}};

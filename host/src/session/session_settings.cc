@@ -33,6 +33,7 @@ json settingsJson(const RobotSessionOptions& s) {
             {"global_sweeps", s.mapping.global_sweeps},
             {"global_chains", s.mapping.global_chains},
             {"chain_fusion", s.mapping.chain_fusion == ChainFusion::kPool ? "pool" : "vote"},
+            {"model", objectModelName(s.mapping.model.objects)},
             {"sigma_r_shapelet", s.mapping.model.sigma_r_shapelet},
             {"sigma_theta_shapelet", s.mapping.model.sigma_theta_shapelet}}}};
 }
@@ -63,7 +64,7 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   const Json& m = required(st, p, "mapping");
   expectObject(m, mp, {"working_memory", "schedule_steps", "sweeps", "smart_proposals",
                        "smart_gain", "min_support", "global_sweeps", "global_chains",
-                       "chain_fusion", "sigma_r_shapelet", "sigma_theta_shapelet"});
+                       "chain_fusion", "model", "sigma_r_shapelet", "sigma_theta_shapelet"});
   auto whole = [&m, &mp](std::string_view key) {
     return integer(required(m, mp, key), member(mp, key));
   };
@@ -83,6 +84,16 @@ void readSettings(const json& st, RobotSessionOptions& s) {
     if (!v.is_string() || (v != "vote" && v != "pool")) fail(path, "expected \"vote\" or \"pool\"");
     const std::string f = v.get<std::string>();
     s.mapping.chain_fusion = f == "pool" ? ChainFusion::kPool : ChainFusion::kVote;
+  }
+  // Recordings made before it was recorded mapped with the paper's model.
+  s.mapping.model.objects = ObjectModel::kPaper;
+  if (m.contains("model")) {
+    const std::string path = member(mp, "model");
+    const Json& v = m["model"];
+    if (!v.is_string()) fail(path, "expected \"paper\" or \"rooms\"");
+    const auto model = objectModelByName(v.get<std::string>());
+    if (!model) fail(path, model.error().message);
+    s.mapping.model.objects = model.value();
   }
   s.mapping.model.sigma_r_shapelet = requiredNumber(m, mp, "sigma_r_shapelet");
   s.mapping.model.sigma_theta_shapelet = requiredNumber(m, mp, "sigma_theta_shapelet");

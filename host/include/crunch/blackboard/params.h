@@ -3,12 +3,28 @@
 // docs/BLACKBOARD.md, and every value is an option.
 #pragma once
 
+#include <string>
+
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
 
 namespace crunch {
 
+// What the blackboard can believe a room holds (`--model`, issue 13).
+enum class ObjectModel {
+  // The paper's: one table size (table_width x table_depth, leg_side legs), no walls, the
+  // paper's acceptance. Keeps the paper's figures reproducible.
+  kPaper,
+  // Walls as line segments, four-legged objects of any size within the prior's range.
+  kRooms,
+};
+
+// "paper" | "rooms"; an Error naming the choices otherwise.
+Result<ObjectModel> objectModelByName(const std::string& name);
+const char* objectModelName(ObjectModel m);
+
 struct ModelParams {
+  ObjectModel objects = ObjectModel::kPaper;
   // Null priors (eqs. 7, 13, 14). Densities, not normalised.
   double c_T = 0.4;
   double c_L = 0.1;
