@@ -122,6 +122,31 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
          "objects the map may hold: paper (one table size, no walls; the paper's figures) | "
          "rooms (walls, four-legged objects of any size)")
       ->default_str("paper");
+  app.add_option_function<std::string>(
+         "--chain-fusion",
+         [&opt](const std::string& name) {
+           const auto f = crunch::chainFusionByName(name);
+           if (!f) throw CLI::ValidationError("--chain-fusion", f.error().message);
+           opt.mapping.chain_fusion = f.value();
+         },
+         "how the global chains become the map: vote (a table half the chains end with) | "
+         "pool (one more chain over their tables) | marginal (posterior probability from the "
+         "samples of every chain's coldest --marginal-steps temperatures, kept above 0.5)")
+      ->default_str("vote");
+  app.add_option("--marginal-steps", opt.mapping.marginal_steps,
+                 "--chain-fusion marginal: coldest temperatures whose sweeps are samples")
+      ->capture_default_str();
+  app.add_option_function<std::string>(
+         "--acceptance",
+         [&opt](const std::string& name) {
+           const auto a = crunch::acceptanceByName(name);
+           if (!a) throw CLI::ValidationError("--acceptance", a.error().message);
+           opt.mapping.sampler.acceptance = a.value();
+         },
+         "move acceptance: paper (the annealed Gibbs conditional of eq. 29, no proposal "
+         "ratio) | rj (reversible-jump Metropolis-Hastings with every move's proposal ratio; "
+         "docs/BLACKBOARD.md)")
+      ->default_str("paper");
   app.add_option("--global-chains", opt.mapping.global_chains,
                  "independent chains of the global inference; a table needs half to agree")
       ->capture_default_str();
@@ -166,6 +191,10 @@ CLI::App* addSweep(CLI::App& app, SweepOptions& o) {
                     "shapelets in working memory, e.g. 7,14 (default 7)");
   sweep->add_option("--seeds", o.grid.seeds, "N: seeds 1..N (default 1)");
   sweep->add_option("--seed-list", o.grid.seed_list, "explicit seeds, e.g. 3,7,11");
+  sweep->add_option("--chain-fusion", o.grid.chain_fusion,
+                    "vote | pool | marginal, for every point (default vote)");
+  sweep->add_option("--acceptance", o.grid.acceptance,
+                    "paper | literal | rj, for every point (default paper)");
   sweep->add_option("--jobs", o.jobs, "worker threads (default: one per core)");
   sweep->add_option("--shard", o.shard,
                     "i/n: run only grid points with index % n == i (e.g. a Slurm array task)");

@@ -13,10 +13,15 @@
 using namespace crunch;
 
 TEST_CASE("Sampler: anneal() performs no heap allocation after warm-up", "[blackboard]") {
+  const Acceptance acceptance =
+      GENERATE(Acceptance::kTempered, Acceptance::kReversibleJump);
+  INFO("acceptance " << acceptanceName(acceptance));
   ModelParams p;
   Blackboard bb(p, 7, 1024);
   Rng rng(8);
-  Sampler sampler(bb, {}, rng);
+  SamplerOptions opt;
+  opt.acceptance = acceptance;
+  Sampler sampler(bb, opt, rng);
   const std::vector<Pose2> tables = {{1, 1, 0.2}, {2.2, 1.1, 1.0}, {1.5, 2.5, 2.0}, {3, 3, 0.7}};
   std::vector<Shapelet> stream;
   for (int round = 0; round < 3; ++round)

@@ -1,6 +1,8 @@
 #include "crunch/blackboard/sampler.h"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <string>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -87,6 +89,58 @@ TEST_CASE("Blackboard: energy audit holds with negative evidence attached", "[bl
   }
   CHECK(sampler.stats().proposals > 200);  // enough moves of every kind to mean something
   CHECK(sampler.stats().audit_max_error < 1e-9);
+}
+
+TEST_CASE("Sampler: every reversible-jump move's local energy change equals the brute force",
+          "[blackboard]") {
+  // The same two partly touched tables and negative evidence as above, under
+  // Acceptance::kReversibleJump: its births, deaths, parent changes, table births/deaths through
+  // a leg and jitters must each change J by what localEnergy() says.
+  ModelParams p;
+  Blackboard bb(p, 16, 256);
+  FreeSpaceGrid free({0, 0}, {3, 3});
+  Rng rays(21);
+  for (int i = 0; i < 400; ++i) {
+    const Vec2 a{rays.uniform(0.5, 2.5), rays.uniform(0.5, 2.5)};
+    const double h = rays.uniform(0, 2 * kPi);
+    free.addRay({a, a + 0.14 * Vec2{std::cos(h), std::sin(h)}});
+  }
+  bb.setFreeSpace(&free);
+  for (const auto& s : TableShapelets({1.0, 1.0, 0.3}, p, {0, 1, 3})) bb.pushShapelet(s);
+  for (const auto& s : TableShapelets({1.6, 1.5, 1.2}, p, {0, 2})) bb.pushShapelet(s);
+  Rng rng(13);
+  SamplerOptions opt;
+  opt.acceptance = Acceptance::kReversibleJump;
+  Sampler sampler(bb, opt, rng);
+  sampler.setAudit(true);
+  int max_tables = 0;
+  for (double beta : {0.3, 1.0, 5.0, 50.0}) {
+    for (int i = 0; i < 20; ++i) {
+      sampler.sweep(beta);
+      max_tables = std::max(max_tables, bb.liveTables());
+    }
+  }
+  CHECK(sampler.stats().proposals > 1000);
+  CHECK(max_tables > 0);  // the table moves fired
+  CHECK(sampler.stats().audit_max_error < 1e-9);
+}
+
+TEST_CASE("Sampler: reversible-jump options are validated; acceptance names round-trip",
+          "[blackboard]") {
+  SamplerOptions o;
+  o.rj_moves = {0, 0, 0, 0, 0};
+  REQUIRE_FALSE(o.validate());
+  CHECK(o.validate().error().message.find("rj_moves") != std::string::npos);
+  o = {};
+  o.rj_box_theta = 1.0;  // above pi/4: a box could wrap onto itself modulo pi/2
+  CHECK(o.validate().error().message.find("rj_box_theta") != std::string::npos);
+  o = {};
+  o.rj_cell = 0.0;
+  CHECK(o.validate().error().message.find("rj_cell") != std::string::npos);
+  for (Acceptance a : {Acceptance::kTempered, Acceptance::kLiteral, Acceptance::kReversibleJump})
+    CHECK(acceptanceByName(acceptanceName(a)).value() == a);
+  CHECK(std::string(acceptanceName(Acceptance::kTempered)) == "paper");
+  CHECK_FALSE(acceptanceByName("metropolis"));
 }
 
 TEST_CASE("Sampler: free space where a rival table's legs would stand picks the real table",

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include "crunch/core/range_check.h"
 
@@ -21,11 +22,39 @@ Status SamplerOptions::validate() const {
       checkRange("prime_sigma_theta", prime_sigma_theta, 0.0, kPi),
       checkRange("jitter_sigma_r", jitter_sigma_r, 0.0, 1.0),
       checkRange("jitter_sigma_theta", jitter_sigma_theta, 0.0, kPi),
-      checkRange("smart_parent_gain", smart_parent_gain, 0.0, 1e6)};
+      checkRange("smart_parent_gain", smart_parent_gain, 0.0, 1e6),
+      checkRange("rj_moves.leg_birth_death", rj_moves.leg_birth_death, 0.0, 1e6),
+      checkRange("rj_moves.leg_jitter", rj_moves.leg_jitter, 0.0, 1e6),
+      checkRange("rj_moves.leg_parent", rj_moves.leg_parent, 0.0, 1e6),
+      checkRange("rj_moves.leg_table", rj_moves.leg_table, 0.0, 1e6),
+      checkRange("rj_moves.table_jitter", rj_moves.table_jitter, 0.0, 1e6),
+      checkAbove("rj_box_margin", rj_box_margin, 0.0, 1.0),
+      checkAbove("rj_box_theta", rj_box_theta, 0.0, kPi / 4),
+      checkCount("rj_steps_per_shapelet", rj_steps_per_shapelet, 1, 1000),
+      checkAbove("rj_cell", rj_cell, 0.0, 1.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
+  const ReversibleMoves& m = rj_moves;
+  if (m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter <= 0.0)
+    return Error{"rj_moves: every weight is 0 (at least one must be positive)"};
   return okStatus();
+}
+
+Result<Acceptance> acceptanceByName(const std::string& name) {
+  if (name == "paper") return Acceptance::kTempered;
+  if (name == "literal") return Acceptance::kLiteral;
+  if (name == "rj") return Acceptance::kReversibleJump;
+  return Error{"acceptance: unknown acceptance '" + name + "' (expected paper, literal or rj)"};
+}
+
+const char* acceptanceName(Acceptance a) {
+  switch (a) {
+    case Acceptance::kLiteral: return "literal";
+    case Acceptance::kReversibleJump: return "rj";
+    case Acceptance::kTempered: break;
+  }
+  return "paper";
 }
 
 Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
@@ -33,18 +62,28 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
   for (int i = opt_.schedule_steps - 1; i >= 0; --i)
     betas_.push_back(std::exp(opt_.schedule_log_top - opt_.schedule_log_step * i));
   order_.reserve(4096);
+  rj_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
 }
 
 void Sampler::anneal() {
+  const bool rj = opt_.acceptance == Acceptance::kReversibleJump;
+  if (rj) enterReversibleSpace();
   for (std::size_t step = 0; step < betas_.size(); ++step) {
     const double beta = betas_[step];
-    for (int s = 0; s < opt_.sweeps_per_temperature; ++s) sweep(beta);
-    if (opt_.prune) prune();
+    for (int s = 0; s < opt_.sweeps_per_temperature; ++s) {
+      sweep(beta);
+      if (opt_.after_sweep) opt_.after_sweep(static_cast<int>(step), s, beta, bb_);
+    }
+    if (opt_.prune && !rj) prune();
     if (opt_.after_temperature) opt_.after_temperature(static_cast<int>(step), beta, bb_);
   }
 }
 
 void Sampler::sweep(double beta) {
+  if (opt_.acceptance == Acceptance::kReversibleJump) {
+    sweepReversible(beta);
+    return;
+  }
   for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
     if (bb_.slotUsed(slot)) primeLeg(slot, beta);
 
@@ -89,10 +128,23 @@ bool Sampler::decide(double delta, double beta) {
 }
 
 int32_t Sampler::sampleParent(const LegHyp& leg, int32_t exclude) {
+  std::array<int32_t, 16> cand;
+  std::array<double, 16> weight;
+  const int n = parentCandidates(leg, exclude, cand, weight);
+  double total = 0.0;
+  for (int i = 0; i < n; ++i) total += weight[i];
+  if (total <= 0.0) return exclude;
+  double u = rng_.uniform() * total;
+  for (int i = 0; i < n; ++i) {
+    if ((u -= weight[i]) < 0.0) return cand[i];
+  }
+  return cand[n - 1];
+}
+
+int Sampler::parentCandidates(const LegHyp& leg, int32_t exclude, std::array<int32_t, 16>& cand,
+                              std::array<double, 16>& weight) const {
   const ModelParams& p = bb_.params();
   constexpr int kMaxCand = 16;
-  std::array<int32_t, kMaxCand> cand;
-  std::array<double, kMaxCand> weight;
   int n = 0;
   cand[n] = kNone;
   weight[n++] = exclude == kNone ? 0.0 : p.c_L;
@@ -106,14 +158,7 @@ int32_t Sampler::sampleParent(const LegHyp& leg, int32_t exclude) {
     cand[n] = t;
     weight[n++] = p.alpha_L * std::exp(-d);
   });
-  double total = 0.0;
-  for (int i = 0; i < n; ++i) total += weight[i];
-  if (total <= 0.0) return exclude;
-  double u = rng_.uniform() * total;
-  for (int i = 0; i < n; ++i) {
-    if ((u -= weight[i]) < 0.0) return cand[i];
-  }
-  return cand[n - 1];
+  return n;
 }
 
 namespace {
@@ -507,6 +552,378 @@ void Sampler::mapTables(std::vector<Pose2>& out) const {
   out.clear();
   for (int32_t id = 0; id < bb_.tableExtent(); ++id)
     if (bb_.table(id).alive) out.push_back(bb_.table(id).pose);
+}
+
+
+// ---- Reversible-jump moves ----------------------------------------------------------------
+//
+// The target is exp(beta J(B)) / rj_cell^n(B) (beta tempers the log joint; the reference
+// measure's cells are not tempered), a density of the unordered configuration B of n hypotheses against the
+// unit-rate Poisson reference measure over leg and table poses (x, y, theta). The chain's state space: every leg lies in the birth box of a working-memory
+// shapelet (boxOf), every table has at least one child. Each step draws one kernel with fixed
+// probabilities (ReversibleMoves), then its object uniformly among a set whose size the move does
+// not change (the slots; the live legs; the live tables), so the selection probabilities cancel
+// between a move and its reverse and each kernel satisfies detailed balance on its own:
+//   leg birth/death at slot s: probability 1/2 each. Birth: pose uniform over the box B_s
+//     (density 1 / |B_s|), parent none. Death: one of the n orphan legs lying in B_s,
+//     uniformly. Birth ratio: log q_rev - log q_fwd = log(|B_s| / n_after), plus the reference
+//     measure's -log rj_cell for the new hypothesis; death: the negative with n_before.
+//   leg jitter, table jitter: symmetric Gaussian steps (children carried rigidly half the time:
+//     a rotation and translation of their poses, Jacobian 1); ratio 0. A step that would leave
+//     a leg outside every box is rejected (the target is 0 there).
+//   parent change: sampleParent's weights excluding the current parent; ratio
+//     log(w_old / W_rev) - log(w_new / W_fwd), both weights computed in the state they apply to.
+//     Refused if it would leave the old parent without a child.
+//   leg table: an orphan leg proposes a parent table at one of the 8 placements that put it at
+//     a corner (probability 1/8 each) plus a Gaussian step (jitter_sigma_r, jitter_sigma_theta);
+//     a leg whose parent has no other child proposes that parent's death. Ratio for the birth
+//     -log q(T | L) - log rj_cell (q: the 8-component mixture, logTableBirthDensity), for the
+//     death the negative.
+// The paper's priming, proposeChild, proposeParent with adoption and prune have no reverse with
+// a known density: they do not fire under kReversibleJump.
+
+void Sampler::enterReversibleSpace() {
+  for (int32_t id = 0; id < bb_.legExtent(); ++id) {
+    const LegHyp& l = bb_.leg(id);
+    if (!l.alive || inSomeBox(l.pose)) continue;
+    bb_.killLeg(id);
+    bb_.releaseLeg(id);
+  }
+  for (int32_t id = 0; id < bb_.tableExtent(); ++id) {
+    const TableHyp& t = bb_.table(id);
+    if (!t.alive) continue;
+    bool child = false;
+    for (int i = 0; i < t.n_children && !child; ++i) child = bb_.leg(t.children[i]).alive;
+    if (child) continue;
+    bb_.killTable(id);
+    bb_.releaseTable(id);
+  }
+}
+
+bool Sampler::decideRj(double delta, double beta, double log_q_ratio) {
+  if (audit_) {
+    const double err = std::abs((bb_.totalEnergy() - audit_before_) - delta);
+    stats_.audit_max_error = std::max(stats_.audit_max_error, err);
+  }
+  ++stats_.proposals;
+  const double log_a = beta * delta + log_q_ratio;
+  const bool ok = log_a >= 0.0 || std::log(rng_.uniform()) < log_a;
+  stats_.accepted += ok;
+  return ok;
+}
+
+bool Sampler::boxOf(int slot, Box& b) const {
+  const Shapelet& s = bb_.shapelet(slot);
+  const double side = bb_.params().leg_side;
+  if (!legCanCause(side, s)) return false;
+  const double half = 0.5 * side, m = opt_.rj_box_margin;
+  b.origin = {s.x, s.y};
+  b.oriented = s.oriented;
+  b.phi = s.phi;
+  if (s.oriented) {
+    b.along = {std::cos(s.phi), std::sin(s.phi)};
+    b.in = inwardNormal(s);
+    b.v0 = half - m;
+    b.v1 = half + m;
+  } else {
+    Vec2 away{s.x - s.ox, s.y - s.oy};
+    b.in = away.norm() > 0.0 ? Vec2(away.normalized()) : Vec2{1.0, 0.0};
+    b.along = {-b.in.y(), b.in.x()};
+    b.v0 = half - m;
+    b.v1 = half * std::sqrt(2.0) + m;
+  }
+  b.u = half + m;
+  const double turn = s.oriented ? 2.0 * opt_.rj_box_theta : kPi / 2;
+  b.volume = 2.0 * b.u * (b.v1 - b.v0) * turn;
+  return true;
+}
+
+bool Sampler::inBox(const Box& b, const Pose2& pose) const {
+  const Vec2 d = pose.position() - b.origin;
+  const double u = d.dot(b.along), v = d.dot(b.in);
+  if (std::abs(u) > b.u || v < b.v0 || v > b.v1) return false;
+  return !b.oriented || std::abs(wrapPeriod(pose.theta - b.phi, kPi / 2)) <= opt_.rj_box_theta;
+}
+
+bool Sampler::inSomeBox(const Pose2& pose) const {
+  const double side = bb_.params().leg_side;
+  const double reach = std::hypot(0.5 * side + opt_.rj_box_margin,
+                                  0.5 * side * std::sqrt(2.0) + opt_.rj_box_margin);
+  bool found = false;
+  bb_.shapeletsWithin(pose.position(), reach, [&](int32_t slot) {
+    Box b;
+    if (!found && bb_.slotUsed(slot) && boxOf(slot, b) && inBox(b, pose)) found = true;
+  });
+  return found;
+}
+
+int Sampler::orphansInBox(const Box& b, int k, int32_t* kth) const {
+  const double reach = std::hypot(b.u, b.v1);
+  // Ids in increasing order: the hash visits cells in an order that does not depend on ids, so
+  // collect the matches' ids by a scan of the (few) candidates and rank them.
+  int n = 0;
+  int32_t best = kNone;
+  // Two passes: the count, then the k-th smallest id (k < n) by counting smaller ids.
+  bb_.legsNear(b.origin + 0.5 * (b.v0 + b.v1) * b.in, reach, [&](int32_t id) {
+    const LegHyp& l = bb_.leg(id);
+    if (l.alive && l.parent == kNone && inBox(b, l.pose)) ++n;
+  });
+  if (kth != nullptr && k < n) {
+    bb_.legsNear(b.origin + 0.5 * (b.v0 + b.v1) * b.in, reach, [&](int32_t id) {
+      const LegHyp& l = bb_.leg(id);
+      if (!l.alive || l.parent != kNone || !inBox(b, l.pose)) return;
+      int smaller = 0;
+      bb_.legsNear(b.origin + 0.5 * (b.v0 + b.v1) * b.in, reach, [&](int32_t o) {
+        const LegHyp& lo = bb_.leg(o);
+        if (o < id && lo.alive && lo.parent == kNone && inBox(b, lo.pose)) ++smaller;
+      });
+      if (smaller == k) best = id;
+    });
+    *kth = best;
+  }
+  return n;
+}
+
+int32_t Sampler::randomLiveLeg() {
+  if (bb_.liveLegs() == 0) return kNone;
+  for (;;) {
+    const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(bb_.legExtent())));
+    if (bb_.leg(id).alive) return id;
+  }
+}
+
+int32_t Sampler::randomLiveTable() {
+  if (bb_.liveTables() == 0) return kNone;
+  for (;;) {
+    const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(bb_.tableExtent())));
+    if (bb_.table(id).alive) return id;
+  }
+}
+
+void Sampler::sweepReversible(double beta) {
+  rj_slots_.clear();
+  for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot) {
+    Box b;
+    if (bb_.slotUsed(slot) && boxOf(slot, b)) rj_slots_.push_back(slot);
+  }
+  const ReversibleMoves& m = opt_.rj_moves;
+  const double total = m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter;
+  const int steps = opt_.rj_steps_per_shapelet * std::max<int>(1, static_cast<int>(rj_slots_.size()));
+  for (int i = 0; i < steps; ++i) {
+    double u = rng_.uniform() * total;
+    if ((u -= m.leg_birth_death) < 0.0) {
+      if (!rj_slots_.empty())
+        rjLegBirthDeath(rj_slots_[rng_.below(static_cast<uint32_t>(rj_slots_.size()))], beta);
+    } else if ((u -= m.leg_jitter) < 0.0) {
+      if (const int32_t id = randomLiveLeg(); id != kNone) rjJitterLeg(id, beta);
+    } else if ((u -= m.leg_parent) < 0.0) {
+      if (const int32_t id = randomLiveLeg(); id != kNone) rjParentChange(id, beta);
+    } else if ((u -= m.leg_table) < 0.0) {
+      if (const int32_t id = randomLiveLeg(); id != kNone) rjLegTable(id, beta);
+    } else {
+      if (const int32_t id = randomLiveTable(); id != kNone) rjJitterTable(id, beta);
+    }
+  }
+}
+
+void Sampler::rjLegBirthDeath(int slot, double beta) {
+  Box b;
+  if (!boxOf(slot, b)) return;
+  if (rng_.uniform() < 0.5) {
+    // log_q_ratio = log(P(death) / n_after) - log(P(birth) / |B_s|) = log(|B_s| / n_after).
+    const double a = rng_.uniform(-b.u, b.u), v = rng_.uniform(b.v0, b.v1);
+    const double th = b.oriented ? b.phi + rng_.uniform(-opt_.rj_box_theta, opt_.rj_box_theta)
+                                 : rng_.uniform(0.0, kPi / 2);
+    const Vec2 c = b.origin + a * b.along + v * b.in;
+    const Pose2 pose{c.x(), c.y(), wrapPeriod(th, kPi / 2)};
+    const int n_after = orphansInBox(b, 0, nullptr) + 1;
+    Touched t;
+    bb_.shapeletsNear(pose.position(), t.shapelets);
+    begin();
+    const double e0 = bb_.localEnergy(t);
+    const int32_t id = bb_.addLeg(pose, kNone);
+    t.legs.add(id);
+    const double e1 = bb_.localEnergy(t);
+    if (!decideRj(e1 - e0, beta, std::log(b.volume / (n_after * opt_.rj_cell)))) {
+      bb_.killLeg(id);
+      bb_.releaseLeg(id);
+    }
+    return;
+  }
+  // log_q_ratio = log(P(birth) / |B_s|) - log(P(death) / n_before) = log(n_before / |B_s|).
+  const int n = orphansInBox(b, 0, nullptr);
+  if (n == 0) return;
+  int32_t id = kNone;
+  orphansInBox(b, static_cast<int>(rng_.below(static_cast<uint32_t>(n))), &id);
+  Touched t;
+  t.legs.add(id);
+  bb_.shapeletsNear(bb_.leg(id).pose.position(), t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.killLeg(id);
+  const double e1 = bb_.localEnergy(t);
+  if (decideRj(e1 - e0, beta, std::log(n * opt_.rj_cell / b.volume))) bb_.releaseLeg(id);
+  else bb_.reviveLeg(id);
+}
+
+void Sampler::rjJitterLeg(int32_t id, double beta) {
+  // Symmetric Gaussian step (theta modulo pi/2 keeps it symmetric): log_q_ratio = 0.
+  const Pose2 old = bb_.leg(id).pose;
+  const Pose2 moved = jittered(old, kPi / 2);
+  if (!inSomeBox(moved)) return;  // outside the state space: target 0, rejected
+  Touched t;
+  t.legs.add(id);
+  t.tables.add(bb_.leg(id).parent);
+  bb_.shapeletsNear(old.position(), t.shapelets);
+  bb_.shapeletsNear(moved.position(), t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.moveLeg(id, moved);
+  const double e1 = bb_.localEnergy(t);
+  if (!decideRj(e1 - e0, beta, 0.0)) bb_.moveLeg(id, old);
+}
+
+void Sampler::rjParentChange(int32_t leg, double beta) {
+  const int32_t old_parent = bb_.leg(leg).parent;
+  // Every table keeps a child: a move that would empty one is outside the state space.
+  if (old_parent != kNone && bb_.table(old_parent).n_children <= 1) return;
+  std::array<int32_t, 16> cand;
+  std::array<double, 16> weight;
+  int n = parentCandidates(bb_.leg(leg), old_parent, cand, weight);
+  double total = 0.0;
+  for (int i = 0; i < n; ++i) total += weight[i];
+  if (total <= 0.0) return;
+  double u = rng_.uniform() * total;
+  int pick = n - 1;
+  for (int i = 0; i < n; ++i) {
+    if ((u -= weight[i]) < 0.0) {
+      pick = i;
+      break;
+    }
+  }
+  const int32_t new_parent = cand[pick];
+  const double log_fwd = std::log(weight[pick] / total);
+  Touched t;
+  t.legs.add(leg);
+  t.tables.add(old_parent);
+  t.tables.add(new_parent);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.setParent(leg, new_parent);
+  const double e1 = bb_.localEnergy(t);
+  // The reverse: sampleParent's weights in the new state, excluding the new parent.
+  n = parentCandidates(bb_.leg(leg), new_parent, cand, weight);
+  double rev_total = 0.0, w_old = 0.0;
+  for (int i = 0; i < n; ++i) {
+    rev_total += weight[i];
+    if (cand[i] == old_parent) w_old = weight[i];
+  }
+  const double log_rev = w_old > 0.0 ? std::log(w_old / rev_total)
+                                     : -std::numeric_limits<double>::infinity();
+  if (!decideRj(e1 - e0, beta, log_rev - log_fwd)) bb_.setParent(leg, old_parent);
+}
+
+double Sampler::logTableBirthDensity(const Pose2& table, const Pose2& leg) const {
+  const ModelParams& p = bb_.params();
+  const double sr = opt_.jitter_sigma_r, st = opt_.jitter_sigma_theta;
+  double acc = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 8; ++k) {
+    const double th = wrapPeriod(leg.theta + (k / 4) * (kPi / 2), kPi);
+    const Vec2 off = Pose2{0, 0, th}.toWorld(p.cornerOffset(k % 4));
+    const double dx = table.x - (leg.x - off.x()), dy = table.y - (leg.y - off.y());
+    // Wrapped normal of period pi: the nearest three windings (sigma << pi).
+    double dth = wrapPeriod(table.theta - th, kPi);
+    if (dth > kPi / 2) dth -= kPi;
+    double wrap = -std::numeric_limits<double>::infinity();
+    for (int j = -1; j <= 1; ++j) {
+      const double e = (dth + j * kPi) / st;
+      wrap = logAddExp(wrap, -0.5 * e * e);
+    }
+    const double lg = -0.5 * (dx * dx + dy * dy) / (sr * sr) - std::log(2 * kPi * sr * sr) +
+                      wrap - std::log(std::sqrt(2 * kPi) * st);
+    acc = logAddExp(acc, std::log(1.0 / 8.0) + lg);
+  }
+  return acc;
+}
+
+void Sampler::rjLegTable(int32_t leg, double beta) {
+  const LegHyp l = bb_.leg(leg);
+  if (l.parent == kNone) {
+    // Birth of a parent table: placement k uniform of 8, then a Gaussian step.
+    const int k = static_cast<int>(rng_.below(8));
+    const double th0 = wrapPeriod(l.pose.theta + (k / 4) * (kPi / 2), kPi);
+    const Vec2 off = Pose2{0, 0, th0}.toWorld(bb_.params().cornerOffset(k % 4));
+    const Pose2 pose{l.pose.x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
+                     l.pose.y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
+                     wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+    const double log_q = logTableBirthDensity(pose, l.pose);
+    Touched t;
+    t.legs.add(leg);
+    begin();
+    const double e0 = bb_.localEnergy(t);
+    const int32_t table = bb_.addTable(pose);
+    bb_.setParent(leg, table);
+    t.tables.add(table);
+    const double e1 = bb_.localEnergy(t);
+    // Reverse: this leg's kernel kills its sole parent with probability 1.
+    if (!decideRj(e1 - e0, beta, -log_q - std::log(opt_.rj_cell))) {
+      bb_.setParent(leg, kNone);
+      bb_.killTable(table);
+      bb_.releaseTable(table);
+    }
+    return;
+  }
+  const TableHyp& tab = bb_.table(l.parent);
+  if (tab.n_children != 1) return;  // not the sole child: nothing this kernel can do
+  const int32_t table = l.parent;
+  const double log_q = logTableBirthDensity(tab.pose, l.pose);
+  Touched t;
+  t.legs.add(leg);
+  t.tables.add(table);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.killTable(table);
+  const double e1 = bb_.localEnergy(t);
+  if (decideRj(e1 - e0, beta, log_q + std::log(opt_.rj_cell))) bb_.releaseTable(table);
+  else bb_.reviveTable(table);
+}
+
+void Sampler::rjJitterTable(int32_t id, double beta) {
+  // jitterTable's move with symmetric steps; a carried child outside every box is refused.
+  const Pose2 old = bb_.table(id).pose;
+  const Pose2 moved = jittered(old, kPi);
+  const bool rigid = rng_.uniform() < 0.5;
+  Touched t;
+  t.tables.add(id);
+  const TableHyp& tab = bb_.table(id);
+  const int n = tab.n_children;
+  std::array<int32_t, kMaxChildren> kids;
+  std::array<Pose2, kMaxChildren> kid_old, kid_new;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    kids[k] = tab.children[i];
+    kid_old[k] = bb_.leg(tab.children[i]).pose;
+    const Vec2 w = moved.toWorld(old.toLocal(kid_old[k].position()));
+    kid_new[k] = rigid ? Pose2{w.x(), w.y(), wrapPeriod(kid_old[k].theta + moved.theta - old.theta, kPi / 2)}
+                       : kid_old[k];
+    t.legs.add(kids[k]);
+    if (rigid) {
+      if (!inSomeBox(kid_new[k])) return;
+      bb_.shapeletsNear(kid_old[k].position(), t.shapelets);
+      bb_.shapeletsNear(kid_new[k].position(), t.shapelets);
+    }
+  }
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.moveTable(id, moved);
+  if (rigid)
+    for (int i = 0; i < n; ++i) bb_.moveLeg(kids[static_cast<size_t>(i)], kid_new[static_cast<size_t>(i)]);
+  const double e1 = bb_.localEnergy(t);
+  if (!decideRj(e1 - e0, beta, 0.0)) {
+    if (rigid)
+      for (int i = 0; i < n; ++i) bb_.moveLeg(kids[static_cast<size_t>(i)], kid_old[static_cast<size_t>(i)]);
+    bb_.moveTable(id, old);
+  }
 }
 
 }  // namespace crunch

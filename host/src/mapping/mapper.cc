@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "crunch/mapping/posterior_marginals.h"
+
 namespace crunch {
 
 namespace {
@@ -25,6 +27,65 @@ SamplerOptions globalSampler(const MappingOptions& options) {
   return so;
 }
 
+// Per-pose MAPs that agree with each fused table.
+void countSupport(std::vector<MapTable>& tables, const Map& map, const FuseOptions& fuse) {
+  for (MapTable& t : tables)
+    for (const PoseMap& pm : map.per_pose)
+      for (const MapTable& q : pm.tables) t.support += tablesAgree(q.pose, t.pose, fuse);
+}
+
+// ChainFusion::kMarginal: the chains' states after each sweep of their coldest marginal_steps
+// temperatures are samples; a table's score is the fraction of samples holding it
+// (posterior_marginals.h), tables above marginal_keep are kept and, of two overlapping ones, the
+// likelier (eq. 25: two tables cannot share space).
+std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
+                                  const FreeSpaceGrid* free, Rng& rng) {
+  const int n_chains = std::max(1, options.global_chains);
+  std::vector<ObjectSample> objects;
+  int n_samples = 0;
+  SamplerOptions so = globalSampler(options);
+  const int first = so.schedule_steps - options.marginal_steps;
+  so.after_sweep = [&](int step, int, double, const Blackboard& board) {
+    if (step < first) return;
+    for (int32_t id = 0; id < board.tableExtent(); ++id) {
+      const TableHyp& t = board.table(id);
+      if (!t.alive) continue;
+      const MapTable m = modelTable(t.pose, options.model);
+      objects.push_back({n_samples, t.pose, {m.width, m.depth, m.leg}});
+    }
+    ++n_samples;
+  };
+  for (int c = 0; c < n_chains; ++c) {
+    Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
+                     4 * map.shapelets.size() + 64);
+    holdWholeRun(board, map, free);
+    Sampler sampler(board, so, rng);
+    sampler.anneal();
+    map.stats.proposals += sampler.stats().proposals;
+    map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, board.liveTables());
+    map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, board.liveLegs());
+  }
+  MarginalOptions mo;
+  mo.radius = options.fuse.radius;
+  mo.angle = options.fuse.angle;
+  mo.angle_period = kPi;
+  std::vector<MapTable> out;
+  for (const MarginalObject& o : posteriorMarginals(objects, n_samples, mo)) {
+    if (o.score <= options.marginal_keep) continue;
+    MapTable t = modelTable(o.pose, options.model);
+    t.width = o.shape[0];
+    t.depth = o.shape[1];
+    t.leg = o.shape[2];
+    t.score = o.score;
+    const OrientedRect r{t.pose, t.width, t.depth};
+    bool clash = false;
+    for (const MapTable& f : out) clash |= overlaps(r, {f.pose, f.width, f.depth});
+    if (!clash) out.push_back(t);
+  }
+  countSupport(out, map, options.fuse);
+  return out;
+}
+
 std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
                                 const FreeSpaceGrid* free, Rng& rng) {
   // Independent chains from the same evidence. The log joint cannot pick among them: it grows
@@ -32,6 +93,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
   // kept when at least half the chains agree on it (fused_map.h's clustering over chains), or
   // all chains' tables compete in one more, cold chain (ChainFusion).
   const int n_chains = std::max(1, options.global_chains);
+  if (options.chain_fusion == ChainFusion::kMarginal) return marginalMap(map, options, free, rng);
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
   std::vector<Pose2> found;
   for (PoseMap& chain : chains) {

@@ -14,11 +14,30 @@ Status MappingOptions::validate() const {
                            checkCount("global_sweeps", global_sweeps, 0, 1000),
                            checkCount("global_chains", global_chains, 1, 256),
                            checkCount("pool_steps", pool_steps, 1,
-                                      std::max(1, sampler.schedule_steps))};
+                                      std::max(1, sampler.schedule_steps)),
+                           checkCount("marginal_steps", marginal_steps, 1,
+                                      std::max(1, sampler.schedule_steps)),
+                           checkRange("marginal_keep", marginal_keep, 0.0, 0.999999)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
   return okStatus();
+}
+
+Result<ChainFusion> chainFusionByName(const std::string& name) {
+  if (name == "vote") return ChainFusion::kVote;
+  if (name == "pool") return ChainFusion::kPool;
+  if (name == "marginal") return ChainFusion::kMarginal;
+  return Error{"chain_fusion: unknown fusion '" + name + "' (expected vote, pool or marginal)"};
+}
+
+const char* chainFusionName(ChainFusion f) {
+  switch (f) {
+    case ChainFusion::kPool: return "pool";
+    case ChainFusion::kMarginal: return "marginal";
+    case ChainFusion::kVote: break;
+  }
+  return "vote";
 }
 
 }  // namespace crunch

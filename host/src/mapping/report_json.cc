@@ -51,7 +51,10 @@ nlohmann::ordered_json samplerJson(const MappingOptions& options) {
           {"working_memory", options.working_memory},
           {"global_sweeps", options.global_sweeps},
           {"global_chains", options.global_chains},
-          {"smart_proposals", s.smart_parent}};
+          {"smart_proposals", s.smart_parent},
+          {"acceptance", acceptanceName(s.acceptance)},
+          {"chain_fusion", chainFusionName(options.chain_fusion)},
+          {"marginal_steps", options.marginal_steps}};
 }
 
 }  // namespace crunch

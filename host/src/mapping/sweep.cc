@@ -236,6 +236,11 @@ std::string fingerprint(const SweepGrid& g, const std::vector<std::string>& scen
   d << "\nglobal " << mapping_defaults.global_sweeps << " " << mapping_defaults.global_chains
     << " smart " << sampler_defaults.smart_parent << " min_support "
     << mapping_defaults.fuse.min_support << "\n";
+  // Only when not the default, so that earlier sweeps' fingerprints stay valid.
+  if (g.chain_fusion != ChainFusion::kVote)
+    d << "chain_fusion " << chainFusionName(g.chain_fusion) << " "
+      << mapping_defaults.marginal_steps << "\n";
+  if (g.acceptance != Acceptance::kTempered) d << "acceptance " << acceptanceName(g.acceptance) << "\n";
   return hex64(fnv1a(d.str()));
 }
 
@@ -361,6 +366,8 @@ MappingOptions SweepGrid::mappingOptions(const SweepPoint& p) const {
   mopt.sampler.schedule_steps = p.schedule_steps;
   mopt.sampler.sweeps_per_temperature = p.sweeps;
   mopt.working_memory = p.working_memory;
+  mopt.chain_fusion = chain_fusion;
+  mopt.sampler.acceptance = acceptance;
   return mopt;
 }
 
@@ -403,6 +410,16 @@ Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec) {
       !s)
     return s.error();
   if (auto s = parseSeeds(spec, g); !s) return s.error();
+  if (!spec.chain_fusion.empty()) {
+    const auto f = chainFusionByName(spec.chain_fusion);
+    if (!f) return Error{"--chain-fusion: " + f.error().message};
+    g.chain_fusion = f.value();
+  }
+  if (!spec.acceptance.empty()) {
+    const auto a = acceptanceByName(spec.acceptance);
+    if (!a) return Error{"--acceptance: " + a.error().message};
+    g.acceptance = a.value();
+  }
   constexpr size_t kMaxGrid = 10'000'000;
   if (g.size() > kMaxGrid) return Error{"sweep: the grid has more than 10^7 points"};
   g.fingerprint = fingerprint(g, scene_texts);

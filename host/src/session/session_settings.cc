@@ -32,7 +32,9 @@ json settingsJson(const RobotSessionOptions& s) {
             {"min_support", s.mapping.fuse.min_support},
             {"global_sweeps", s.mapping.global_sweeps},
             {"global_chains", s.mapping.global_chains},
-            {"chain_fusion", s.mapping.chain_fusion == ChainFusion::kPool ? "pool" : "vote"},
+            {"chain_fusion", chainFusionName(s.mapping.chain_fusion)},
+            {"marginal_steps", s.mapping.marginal_steps},
+            {"acceptance", acceptanceName(so.acceptance)},
             {"model", objectModelName(s.mapping.model.objects)},
             {"sigma_r_shapelet", s.mapping.model.sigma_r_shapelet},
             {"sigma_theta_shapelet", s.mapping.model.sigma_theta_shapelet}}}};
@@ -64,7 +66,8 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   const Json& m = required(st, p, "mapping");
   expectObject(m, mp, {"working_memory", "schedule_steps", "sweeps", "smart_proposals",
                        "smart_gain", "min_support", "global_sweeps", "global_chains",
-                       "chain_fusion", "model", "sigma_r_shapelet", "sigma_theta_shapelet"});
+                       "chain_fusion", "marginal_steps", "acceptance", "model", "sigma_r_shapelet",
+                       "sigma_theta_shapelet"});
   auto whole = [&m, &mp](std::string_view key) {
     return integer(required(m, mp, key), member(mp, key));
   };
@@ -81,9 +84,22 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   if (m.contains("chain_fusion")) {
     const std::string path = member(mp, "chain_fusion");
     const Json& v = m["chain_fusion"];
-    if (!v.is_string() || (v != "vote" && v != "pool")) fail(path, "expected \"vote\" or \"pool\"");
-    const std::string f = v.get<std::string>();
-    s.mapping.chain_fusion = f == "pool" ? ChainFusion::kPool : ChainFusion::kVote;
+    if (!v.is_string()) fail(path, "expected \"vote\", \"pool\" or \"marginal\"");
+    const auto f = chainFusionByName(v.get<std::string>());
+    if (!f) fail(path, "expected \"vote\", \"pool\" or \"marginal\"");
+    s.mapping.chain_fusion = f.value();
+  }
+  // Recordings made before they were recorded: 4 coldest temperatures, the paper's acceptance.
+  s.mapping.marginal_steps = MappingOptions{}.marginal_steps;
+  if (m.contains("marginal_steps")) s.mapping.marginal_steps = whole("marginal_steps");
+  s.mapping.sampler.acceptance = Acceptance::kTempered;
+  if (m.contains("acceptance")) {
+    const std::string path = member(mp, "acceptance");
+    const Json& v = m["acceptance"];
+    if (!v.is_string()) fail(path, "expected \"paper\", \"literal\" or \"rj\"");
+    const auto a = acceptanceByName(v.get<std::string>());
+    if (!a) fail(path, a.error().message);
+    s.mapping.sampler.acceptance = a.value();
   }
   // Recordings made before it was recorded mapped with the paper's model.
   s.mapping.model.objects = ObjectModel::kPaper;

@@ -13,6 +13,7 @@
 // Deterministic for a given Rng state. Not thread-safe.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -27,6 +28,25 @@ namespace crunch {
 enum class Acceptance {
   kTempered,  // P(new)^b / (P(new)^b + P(old)^b): the annealed Gibbs conditional (default)
   kLiteral,   // P(new | mb)^b, eq. 29 read literally
+  // Reversible-jump Metropolis-Hastings: min(1, exp(b * delta + log q_reverse - log q_forward)),
+  // tempering only the target, over a move set in which every move has a reverse whose proposal
+  // density is known (sweepReversible, docs/BLACKBOARD.md "Reversible-jump acceptance"). At
+  // b = 1 the chain leaves the posterior exp(J) invariant (test/blackboard/detailed_balance_test).
+  kReversibleJump,
+};
+
+// "paper" (kTempered) | "literal" | "rj"; an Error naming the choices otherwise.
+Result<Acceptance> acceptanceByName(const std::string& name);
+const char* acceptanceName(Acceptance a);
+
+// Relative frequencies of the reversible-jump kernels (Acceptance::kReversibleJump); each step
+// of a sweep draws one kernel with these weights, then its object uniformly.
+struct ReversibleMoves {
+  double leg_birth_death = 1.0;  // a working-memory slot: birth or death of an orphan leg
+  double leg_jitter = 1.0;       // a leg: Gaussian pose step
+  double leg_parent = 1.0;       // a leg: parent change (sampleParent's weights)
+  double leg_table = 1.0;        // a leg: birth of a parent table, or death of its sole parent
+  double table_jitter = 1.0;     // a table: Gaussian pose step, children carried half the time
 };
 
 struct SamplerOptions {
@@ -55,16 +75,39 @@ struct SamplerOptions {
   // Each leg near another corner of a placement adds this to its weight (base weight 1).
   double smart_parent_gain = 8.0;
   bool prune = true;
+  // Acceptance::kReversibleJump only (sweepReversible). Q(pa(S)) there is uniform over a box
+  // in the shapelet's frame: along the face within half a leg side plus rj_box_margin, behind
+  // it at half a leg side (up to half the diagonal for a point contact) give or take
+  // rj_box_margin, turned within rj_box_theta of the face (any way for a point contact).
+  ReversibleMoves rj_moves;
+  double rj_box_margin = 0.01;
+  double rj_box_theta = kPi / 16;
+  // Steps per sweep: this many per working-memory shapelet a leg can cause.
+  int rj_steps_per_shapelet = 4;
+  // The reference measure of the reversible target: J (blackboard.h) is each hypothesis'
+  // presence log-odds, P(H) = delta^3 p (eq. 28), i.e. a probability per pose cell; the
+  // target's density over poses (x, y, theta) is exp(J) / rj_cell^n for n hypotheses.
+  // Default: the model's leg-to-corner resolution, sigma_r_leg^2 * sigma_theta_leg
+  // (0.01 m)^2 * pi/32 ~ 1e-5 m^2 rad. It sets what beta = 1 means; the cold end does not
+  // depend on it.
+  double rj_cell = 1e-5;
   // Called by anneal() after each temperature (its sweeps and pruning) with the temperature's
   // place in the annealing, 0 = the hottest (beta_{schedule_steps-1}) ... schedule_steps - 1 =
   // the coldest, its beta, and the blackboard: for pictures of it part-way (paper Fig. 4).
   // Empty by default.
   std::function<void(int step, double beta, const Blackboard& board)> after_temperature;
+  // Called by anneal() after every sweep (before the temperature's pruning) with the
+  // temperature's place in the annealing (as after_temperature), the sweep's index within it
+  // and the blackboard: for estimates from samples (mapping/posterior_marginals.h). Empty by
+  // default.
+  std::function<void(int step, int sweep, double beta, const Blackboard& board)> after_sweep;
 
   // The ranges: schedule_steps and sweeps_per_temperature 1..1000 (a run's time grows with
   // their product); schedule_log_top in [-50, 50] and schedule_log_step in [0, 10] (beta stays
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
-  // smart_parent_gain 0..1e6. okStatus(), or an Error naming the first bad field.
+  // smart_parent_gain 0..1e6; rj_moves' weights 0..1e6, not all 0; rj_box_margin (0, 1],
+  // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell (0, 1]. okStatus(), or an Error naming the
+  // first bad field.
   Status validate() const;
 };
 
@@ -82,8 +125,13 @@ class Sampler {
 
   // Runs the whole annealing schedule on the blackboard's current working memory.
   void anneal();
-  // One pass of Algorithm 1's inner loop at inverse temperature beta (without pruning).
+  // One pass of Algorithm 1's inner loop at inverse temperature beta (without pruning); under
+  // Acceptance::kReversibleJump one sweep of sweepReversible instead.
   void sweep(double beta);
+  // Under Acceptance::kReversibleJump, anneal() first removes legs that lie in no working-memory
+  // shapelet's birth box and then tables left without a child: the reversible chain's state
+  // space (every leg in some box, every table with a child). It never prunes after that.
+  void enterReversibleSpace();
   // Removes hypotheses linked to no shapelet directly or via a common ancestor.
   void prune();
 
@@ -102,6 +150,37 @@ class Sampler {
   };
   void begin();
   bool decide(double delta, double beta);
+  // Reversible jump: accept with min(1, exp(beta * delta + log_q_ratio)), log_q_ratio =
+  // log q(reverse) - log q(forward) including Jacobians.
+  bool decideRj(double delta, double beta, double log_q_ratio);
+  // ---- Reversible-jump moves (Acceptance::kReversibleJump) ----
+  void sweepReversible(double beta);
+  // The birth box of slot s: frame and extents; false if no leg can cause the shapelet.
+  struct Box {
+    Vec2 origin, along, in;
+    double u, v0, v1;  // |along coordinate| <= u, v0 <= inward coordinate <= v1
+    bool oriented;
+    double phi;
+    double volume;
+  };
+  bool boxOf(int slot, Box& b) const;
+  bool inBox(const Box& b, const Pose2& pose) const;
+  bool inSomeBox(const Pose2& pose) const;
+  // Orphan legs in box b: the count, and the k-th (k < count) in id order.
+  int orphansInBox(const Box& b, int k, int32_t* kth) const;
+  void rjLegBirthDeath(int slot, double beta);
+  void rjJitterLeg(int32_t id, double beta);
+  void rjParentChange(int32_t id, double beta);
+  void rjLegTable(int32_t id, double beta);
+  void rjJitterTable(int32_t id, double beta);
+  // log q(table | leg) of rjLegTable's birth: 8 placements, each with a Gaussian step.
+  double logTableBirthDensity(const Pose2& table, const Pose2& leg) const;
+  // sampleParent's weights for `leg` excluding `exclude`: candidates and weights (up to 16).
+  int parentCandidates(const LegHyp& leg, int32_t exclude, std::array<int32_t, 16>& cand,
+                       std::array<double, 16>& weight) const;
+  // A live id of the pool, uniformly (rejection over the extent); kNone if none is live.
+  int32_t randomLiveLeg();
+  int32_t randomLiveTable();
   void primeLeg(int slot, double beta);
   // primeLeg's leg for an oriented shapelet (on its face) and for a point contact.
   Pose2 legOnFace(const Shapelet& s);
@@ -135,6 +214,7 @@ class Sampler {
   SamplerStats stats_;
   std::vector<double> betas_;
   std::vector<Ref> order_;
+  std::vector<int> rj_slots_;  // working-memory slots with a birth box (sweepReversible)
   bool audit_ = false;
   double audit_before_ = 0.0;
 };

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <string>
 
 #include "crunch/blackboard/blackboard.h"
 #include "crunch/blackboard/params.h"
@@ -26,7 +27,17 @@ enum class ChainFusion {
   // tell from what it cannot explain: the located chain's faces longer than a leg
   // (ContactReport::face_span) no leg can cause.
   kPool,
+  // Posterior marginals (mapping/posterior_marginals.h): every chain's tables after each sweep
+  // of the schedule's `marginal_steps` coldest temperatures are samples; a table is kept when
+  // more than half of all samples (over chains and sweeps) hold a matching one, and its score is
+  // that fraction. Rather than a majority of each chain's last state, a table a chain holds
+  // part of the time counts for that part.
+  kMarginal,
 };
+
+// "vote" | "pool" | "marginal"; an Error naming the choices otherwise.
+Result<ChainFusion> chainFusionByName(const std::string& name);
+const char* chainFusionName(ChainFusion f);
 
 struct MappingOptions {
   ModelParams model;
@@ -40,6 +51,10 @@ struct MappingOptions {
   int global_chains = 8;  // independent chains
   ChainFusion chain_fusion = ChainFusion::kVote;
   int pool_steps = 4;  // kPool: the coldest temperatures of the schedule the pooled chain runs
+  // kMarginal: the coldest temperatures of each chain's schedule whose sweeps are samples.
+  int marginal_steps = 4;
+  // kMarginal: a table is kept when its posterior probability (score) is above this.
+  double marginal_keep = 0.5;
   // The global inference also weighs negative evidence: where whiskers swept and touched
   // nothing (free_space.h). Per-pose MAPs never do (the paper's collation).
   bool negative_evidence = true;
@@ -54,7 +69,8 @@ struct MappingOptions {
 
   // Every setting of the run: model.validate(), sampler.validate(), fuse.validate() (their
   // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
-  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256, pool_steps 1..sampler.schedule_steps.
+  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256, pool_steps and marginal_steps 1..sampler.schedule_steps,
+  // marginal_keep in [0, 1).
   // okStatus(), or an Error naming the first bad field. runMapping and session::RobotSession
   // call it; a Mapper must be given valid options.
   Status validate() const;

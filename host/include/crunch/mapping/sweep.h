@@ -52,6 +52,8 @@ struct SweepGridSpec {
   std::string working_memory;  // MappingOptions::working_memory values (default 7)
   std::string seeds;           // N >= 1: seeds 1..N
   std::string seed_list;       // explicit seeds (excludes seeds); neither: seed 1
+  std::string chain_fusion;    // every point's MappingOptions::chain_fusion by name (default vote)
+  std::string acceptance;      // every point's SamplerOptions::acceptance by name (default paper)
 };
 
 struct SweepScene {
@@ -71,13 +73,15 @@ struct SweepGrid {
   std::vector<NoiseRegime> noises;
   std::vector<int> schedule_steps, sweeps, working_memory;
   std::vector<std::uint64_t> seeds;
+  ChainFusion chain_fusion = ChainFusion::kVote;  // the same for every point
+  Acceptance acceptance = Acceptance::kTempered;  // the same for every point
   std::string fingerprint;  // 16 hex digits
 
   std::size_t size() const;
   // Index -> point, seed fastest, scene slowest. Requires index < size().
   SweepPoint pointAt(std::size_t index) const;
   // The point's mapping settings: defaults, with the point's seed, schedule_steps, sweeps and
-  // working_memory. Valid: buildSweepGrid validated every point. (The run raises eq. 12's
+  // working_memory, and the grid's chain_fusion and acceptance. Valid: buildSweepGrid validated every point. (The run raises eq. 12's
   // shapelet sigmas to the point's noise, withSensorNoise, as every simulated run does.)
   MappingOptions mappingOptions(const SweepPoint& point) const;
 };
