@@ -128,8 +128,10 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
            const auto f = crunch::chainFusionByName(name);
            if (!f) throw CLI::ValidationError("--chain-fusion", f.error().message);
            opt.mapping.chain_fusion = f.value();
+           opt.chain_fusion_given = true;
          },
-         "how the global chains become the map: vote (a table half the chains end with) | "
+         "how the global chains become the map (default: pool for the physics sensor, else "
+         "vote): vote (a table half the chains end with) | "
          "pool (one more chain over their tables) | marginal (posterior probability from the "
          "samples of every chain's coldest --marginal-steps temperatures, kept above 0.5)")
       ->default_str("vote");

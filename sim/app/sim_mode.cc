@@ -27,6 +27,7 @@ Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
   o.models_path = opt.models_path.empty() ? std::string(CRUNCH_DEFAULT_MODELS) : opt.models_path;
   o.seed = opt.seed;
   o.mapping = opt.mapping;
+  o.chain_fusion_given = opt.chain_fusion_given;
   o.snapshot_pose = opt.snapshot_pose;
   o.snapshot_temperature = opt.snapshot_temperature;
   return o;

@@ -144,7 +144,7 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   // tells its face from a leg's (ContactReport::face_span): its chains' tables can compete in
   // the posterior (ChainFusion::kPool). The classifiers' cannot; nor can the roaming robot's
   // single-whisker touches of walls (the session keeps the vote: docs/BLACKBOARD.md).
-  mopt.chain_fusion = physics ? ChainFusion::kPool : ChainFusion::kVote;
+  if (!o.chain_fusion_given) mopt.chain_fusion = physics ? ChainFusion::kPool : ChainFusion::kVote;
   std::optional<SnapshotRecorder> recorder;
   if (o.snapshot_pose) {
     recorder.emplace(*o.snapshot_pose, o.snapshot_temperature, scene.poses, defaultWhiskerArray());

@@ -35,6 +35,8 @@ SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_
   o.noise = g.noises[p.noise];
   o.seed = p.seed;
   o.mapping = g.mappingOptions(p);
+  // The grid's fusion as given (vote unless --chain-fusion): the gaussian sensor's default.
+  o.chain_fusion_given = true;
   o.world_mutex = &g_world_mutex;
   auto run = runSimulation(scenes[p.scene], o);
   if (!run) throw std::runtime_error(run.error().message);  // the grid validated every point

@@ -128,7 +128,7 @@ TEST_CASE("Sampler: every reversible-jump move's local energy change equals the 
 TEST_CASE("Sampler: reversible-jump options are validated; acceptance names round-trip",
           "[blackboard]") {
   SamplerOptions o;
-  o.rj_moves = {0, 0, 0, 0, 0};
+  o.rj_moves = {0, 0, 0, 0, 0, 0};
   REQUIRE_FALSE(o.validate());
   CHECK(o.validate().error().message.find("rj_moves") != std::string::npos);
   o = {};

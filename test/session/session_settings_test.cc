@@ -33,7 +33,9 @@ session::RobotSessionOptions unusualOptions() {
   m.fuse.min_support = 2;
   m.global_sweeps = 5;
   m.global_chains = 3;
-  m.chain_fusion = ChainFusion::kPool;  // not the session's default (the vote)
+  m.chain_fusion = ChainFusion::kMarginal;  // not the session's default (the vote)
+  m.marginal_steps = 3;
+  m.sampler.acceptance = Acceptance::kReversibleJump;
   m.model.objects = ObjectModel::kRooms;  // not the default (the paper's)
   session::RobotSessionOptions s = session::sessionOptions(shippedModels(), m, 42);
   s.start = {0.3, 0.775, -0.25};
@@ -85,7 +87,9 @@ TEST_CASE("Session settings: metadata written and read back gives the same optio
   CHECK(s.mapping.fuse.min_support == 2);
   CHECK(s.mapping.global_sweeps == 5);
   CHECK(s.mapping.global_chains == 3);
-  CHECK(s.mapping.chain_fusion == ChainFusion::kPool);
+  CHECK(s.mapping.chain_fusion == ChainFusion::kMarginal);
+  CHECK(s.mapping.marginal_steps == 3);
+  CHECK(s.mapping.sampler.acceptance == Acceptance::kReversibleJump);
   CHECK(s.mapping.model.objects == ObjectModel::kRooms);
   CHECK(s.mapping.model.sigma_r_shapelet == want.mapping.model.sigma_r_shapelet);
   CHECK(s.mapping.model.sigma_theta_shapelet == want.mapping.model.sigma_theta_shapelet);
@@ -107,8 +111,10 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
        {"seed", "start", "area", "checksum_includes_header", "onset_threshold", "mapping"}) {
     CHECK(st.contains(key));
   }
-  CHECK(st["mapping"].size() == 12);
-  CHECK(st["mapping"]["chain_fusion"] == "pool");
+  CHECK(st["mapping"].size() == 14);
+  CHECK(st["mapping"]["chain_fusion"] == "marginal");
+  CHECK(st["mapping"]["marginal_steps"] == 3);
+  CHECK(st["mapping"]["acceptance"] == "rj");
   CHECK(st["mapping"]["model"] == "rooms");
 }
 
@@ -155,7 +161,22 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     REQUIRE(got);
     CHECK(got.value().mapping.chain_fusion == ChainFusion::kVote);
   }
-  SECTION("a chain_fusion that is neither vote nor pool") {
+  SECTION("a recording from before marginal_steps and acceptance were recorded") {
+    json meta = json::parse(good);
+    meta["settings"]["mapping"].erase("marginal_steps");
+    meta["settings"]["mapping"].erase("acceptance");
+    auto got = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(got);
+    CHECK(got.value().mapping.marginal_steps == MappingOptions{}.marginal_steps);
+    CHECK(got.value().mapping.sampler.acceptance == Acceptance::kTempered);
+  }
+  SECTION("an acceptance that is not paper, literal or rj") {
+    CHECK(errorOf(withSetting(good, "mapping.acceptance", "metropolis"))
+              .find("settings.mapping.acceptance") != std::string::npos);
+    CHECK(errorOf(withSetting(good, "mapping.acceptance", 2))
+              .find("settings.mapping.acceptance") != std::string::npos);
+  }
+  SECTION("a chain_fusion that is neither vote, pool nor marginal") {
     CHECK(errorOf(withSetting(good, "mapping.chain_fusion", "majority"))
               .find("settings.mapping.chain_fusion") != std::string::npos);
     CHECK(errorOf(withSetting(good, "mapping.chain_fusion", 1))

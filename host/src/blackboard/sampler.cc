@@ -28,6 +28,7 @@ Status SamplerOptions::validate() const {
       checkRange("rj_moves.leg_parent", rj_moves.leg_parent, 0.0, 1e6),
       checkRange("rj_moves.leg_table", rj_moves.leg_table, 0.0, 1e6),
       checkRange("rj_moves.table_jitter", rj_moves.table_jitter, 0.0, 1e6),
+      checkRange("rj_moves.table_birth_death", rj_moves.table_birth_death, 0.0, 1e6),
       checkAbove("rj_box_margin", rj_box_margin, 0.0, 1.0),
       checkAbove("rj_box_theta", rj_box_theta, 0.0, kPi / 4),
       checkCount("rj_steps_per_shapelet", rj_steps_per_shapelet, 1, 1000),
@@ -36,7 +37,8 @@ Status SamplerOptions::validate() const {
     if (!s) return s;
   }
   const ReversibleMoves& m = rj_moves;
-  if (m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter <= 0.0)
+  if (m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter +
+          m.table_birth_death <= 0.0)
     return Error{"rj_moves: every weight is 0 (at least one must be positive)"};
   return okStatus();
 }
@@ -575,12 +577,25 @@ void Sampler::mapTables(std::vector<Pose2>& out) const {
 //     log(w_old / W_rev) - log(w_new / W_fwd), both weights computed in the state they apply to.
 //     Refused if it would leave the old parent without a child.
 //   leg table: an orphan leg proposes a parent table at one of the 8 placements that put it at
-//     a corner (probability 1/8 each) plus a Gaussian step (jitter_sigma_r, jitter_sigma_theta);
-//     a leg whose parent has no other child proposes that parent's death. Ratio for the birth
+//     a corner (probability 1/8 each) plus a Gaussian step (jitter_sigma_r, jitter_sigma_theta),
+//     refused unless the leg lies within cornerLinkRadius of one of its corners; a leg whose
+//     parent has no other child and lies so proposes that parent's death. Ratio for the birth
 //     -log q(T | L) - log rj_cell (q: the 8-component mixture, logTableBirthDensity), for the
 //     death the negative.
-// The paper's priming, proposeChild, proposeParent with adoption and prune have no reverse with
-// a known density: they do not fire under kReversibleJump.
+//   table birth/death (probability 1/2 each). Birth: a live leg uniformly (1/n_legs; n_legs is
+//     the same before and after), if an orphan it proposes one of its 8 placements with the
+//     smart weights of proposeParent (legs already near the placement's other corners) plus a
+//     Gaussian step; the table adopts exactly the orphans within cornerLinkRadius of its corners
+//     (refused if the proposer is not among them or they are more than kMaxChildren). Its
+//     density sums over every adopted leg that could have proposed it:
+//     q_b(T) = (1/n_legs) sum_{L in C(T)} sum_k w_k(L)/W(L) N(T; placement_k(L)). The weights
+//     count live legs, whatever their parents, so they are the same before and after.
+//     Death: a live table uniformly (1/n_tables), its children become orphans; refused unless a
+//     birth from the result would adopt exactly these children. Ratio for the birth
+//     log(1/n_tables_after) - log q_b(T) - log rj_cell; for the death the negative.
+// The paper's priming, proposeChild, proposeParent (its adoption takes legs from other tables
+// and kills emptied ones, a move whose reverse has no known density) and prune do not fire
+// under kReversibleJump; the smart table birth above is their reversible substitute.
 
 void Sampler::enterReversibleSpace() {
   for (int32_t id = 0; id < bb_.legExtent(); ++id) {
@@ -707,7 +722,8 @@ void Sampler::sweepReversible(double beta) {
     if (bb_.slotUsed(slot) && boxOf(slot, b)) rj_slots_.push_back(slot);
   }
   const ReversibleMoves& m = opt_.rj_moves;
-  const double total = m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter;
+  const double total = m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table +
+                       m.table_jitter + m.table_birth_death;
   const int steps = opt_.rj_steps_per_shapelet * std::max<int>(1, static_cast<int>(rj_slots_.size()));
   for (int i = 0; i < steps; ++i) {
     double u = rng_.uniform() * total;
@@ -720,8 +736,10 @@ void Sampler::sweepReversible(double beta) {
       if (const int32_t id = randomLiveLeg(); id != kNone) rjParentChange(id, beta);
     } else if ((u -= m.leg_table) < 0.0) {
       if (const int32_t id = randomLiveLeg(); id != kNone) rjLegTable(id, beta);
-    } else {
+    } else if ((u -= m.table_jitter) < 0.0) {
       if (const int32_t id = randomLiveTable(); id != kNone) rjJitterTable(id, beta);
+    } else {
+      rjTableBirthDeath(beta);
     }
   }
 }
@@ -846,6 +864,14 @@ double Sampler::logTableBirthDensity(const Pose2& table, const Pose2& leg) const
   return acc;
 }
 
+bool Sampler::nearCorner(const Pose2& table, const Vec2& at) const {
+  const ModelParams& p = bb_.params();
+  const double r = p.cornerLinkRadius();
+  for (int c = 0; c < 4; ++c)
+    if ((table.toWorld(p.cornerOffset(c)) - at).squaredNorm() <= r * r) return true;
+  return false;
+}
+
 void Sampler::rjLegTable(int32_t leg, double beta) {
   const LegHyp l = bb_.leg(leg);
   if (l.parent == kNone) {
@@ -856,6 +882,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
     const Pose2 pose{l.pose.x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
                      l.pose.y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
                      wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+    if (!nearCorner(pose, l.pose.position())) return;
     const double log_q = logTableBirthDensity(pose, l.pose);
     Touched t;
     t.legs.add(leg);
@@ -876,6 +903,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   const TableHyp& tab = bb_.table(l.parent);
   if (tab.n_children != 1) return;  // not the sole child: nothing this kernel can do
   const int32_t table = l.parent;
+  if (!nearCorner(tab.pose, l.pose.position())) return;  // the birth could not have made it
   const double log_q = logTableBirthDensity(tab.pose, l.pose);
   Touched t;
   t.legs.add(leg);
@@ -924,6 +952,137 @@ void Sampler::rjJitterTable(int32_t id, double beta) {
       for (int i = 0; i < n; ++i) bb_.moveLeg(kids[static_cast<size_t>(i)], kid_old[static_cast<size_t>(i)]);
     bb_.moveTable(id, old);
   }
+}
+
+
+void Sampler::smartPlacements(int32_t leg, std::array<Pose2, 8>& place,
+                              std::array<double, 8>& weight) const {
+  const ModelParams& p = bb_.params();
+  const LegHyp& l = bb_.leg(leg);
+  const double r = p.cornerLinkRadius();
+  for (int k = 0; k < 8; ++k) {
+    const auto kk = static_cast<size_t>(k);
+    const double th = wrapPeriod(l.pose.theta + (k / 4) * (kPi / 2), kPi);
+    const Vec2 off = Pose2{0, 0, th}.toWorld(p.cornerOffset(k % 4));
+    place[kk] = {l.pose.x - off.x(), l.pose.y - off.y(), th};
+    double w = 1.0;
+    for (int c = 0; c < 4; ++c) {
+      if (c == k % 4) continue;
+      const Vec2 corner = place[kk].toWorld(p.cornerOffset(c));
+      bb_.legsNear(corner, r, [&](int32_t o) {
+        const LegHyp& ol = bb_.leg(o);
+        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= r * r)
+          w += opt_.smart_parent_gain;
+      });
+    }
+    weight[kk] = w;
+  }
+}
+
+bool Sampler::adoptable(const Pose2& pose, IdSet<4 * kMaxChildren>& out) const {
+  const ModelParams& p = bb_.params();
+  const double r = p.cornerLinkRadius();
+  bool overflow = false;
+  for (int c = 0; c < 4; ++c) {
+    const Vec2 corner = pose.toWorld(p.cornerOffset(c));
+    bb_.legsNear(corner, r, [&](int32_t o) {
+      const LegHyp& ol = bb_.leg(o);
+      if (!ol.alive || ol.parent != kNone || (ol.pose.position() - corner).squaredNorm() > r * r)
+        return;
+      if (!out.contains(o) && out.n >= kMaxChildren) overflow = true;
+      out.add(o);
+    });
+  }
+  return !overflow;
+}
+
+double Sampler::logSmartBirthDensity(const Pose2& pose,
+                                     const IdSet<4 * kMaxChildren>& children) const {
+  const double sr = opt_.jitter_sigma_r, st = opt_.jitter_sigma_theta;
+  const double log_norm = -std::log(2 * kPi * sr * sr) - std::log(std::sqrt(2 * kPi) * st);
+  double acc = -std::numeric_limits<double>::infinity();
+  std::array<Pose2, 8> place;
+  std::array<double, 8> weight;
+  for (int32_t leg : children.span()) {
+    smartPlacements(leg, place, weight);
+    double total = 0.0;
+    for (double w : weight) total += w;
+    for (size_t k = 0; k < 8; ++k) {
+      const double dx = pose.x - place[k].x, dy = pose.y - place[k].y;
+      double dth = wrapPeriod(pose.theta - place[k].theta, kPi);
+      if (dth > kPi / 2) dth -= kPi;
+      double wrap = -std::numeric_limits<double>::infinity();
+      for (int j = -1; j <= 1; ++j) {
+        const double e = (dth + j * kPi) / st;
+        wrap = logAddExp(wrap, -0.5 * e * e);
+      }
+      acc = logAddExp(acc, std::log(weight[k] / total) - 0.5 * (dx * dx + dy * dy) / (sr * sr) +
+                               wrap + log_norm);
+    }
+  }
+  return acc;
+}
+
+void Sampler::rjTableBirthDeath(double beta) {
+  const double log_cell = std::log(opt_.rj_cell);
+  if (rng_.uniform() < 0.5) {
+    const int32_t leg = randomLiveLeg();
+    if (leg == kNone || bb_.leg(leg).parent != kNone) return;
+    const double log_pick = -std::log(static_cast<double>(bb_.liveLegs()));
+    std::array<Pose2, 8> place;
+    std::array<double, 8> weight;
+    smartPlacements(leg, place, weight);
+    double total = 0.0;
+    for (double w : weight) total += w;
+    double u = rng_.uniform() * total;
+    size_t k = 0;
+    while (k < 7 && (u -= weight[k]) >= 0.0) ++k;
+    const Pose2 pose{place[k].x + rng_.normal(0, opt_.jitter_sigma_r),
+                     place[k].y + rng_.normal(0, opt_.jitter_sigma_r),
+                     wrapPeriod(place[k].theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+    IdSet<4 * kMaxChildren> kids;
+    if (!adoptable(pose, kids) || !kids.contains(leg)) return;
+    const double log_fwd = log_pick + logSmartBirthDensity(pose, kids);
+    Touched t;
+    for (int32_t o : kids.span()) t.legs.add(o);
+    begin();
+    const double e0 = bb_.localEnergy(t);
+    const int32_t table = bb_.addTable(pose);
+    for (int32_t o : kids.span()) bb_.setParent(o, table);
+    t.tables.add(table);
+    const double e1 = bb_.localEnergy(t);
+    const double log_rev = -std::log(static_cast<double>(bb_.liveTables()));
+    if (!decideRj(e1 - e0, beta, log_rev - log_fwd - log_cell)) {
+      for (int32_t o : kids.span()) bb_.setParent(o, kNone);
+      bb_.killTable(table);
+      bb_.releaseTable(table);
+    }
+    return;
+  }
+  const int32_t table = randomLiveTable();
+  if (table == kNone) return;
+  const double log_fwd = -std::log(static_cast<double>(bb_.liveTables()));
+  const TableHyp& tab = bb_.table(table);
+  const Pose2 pose = tab.pose;
+  Touched t;
+  t.tables.add(table);
+  for (int i = 0; i < tab.n_children; ++i) t.legs.add(tab.children[i]);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.killTable(table);
+  // The reverse birth must adopt exactly these children.
+  IdSet<4 * kMaxChildren> kids;
+  bool same = adoptable(pose, kids) && kids.n == t.legs.n;
+  for (int32_t o : t.legs.span()) same = same && kids.contains(o);
+  if (!same) {
+    bb_.reviveTable(table);
+    return;
+  }
+  const double e1 = bb_.localEnergy(t);
+  const double log_rev = -std::log(static_cast<double>(bb_.liveLegs())) +
+                         logSmartBirthDensity(pose, kids);
+  if (decideRj(e1 - e0, beta, log_rev + log_cell - log_fwd)) bb_.releaseTable(table);
+  else bb_.reviveTable(table);
 }
 
 }  // namespace crunch

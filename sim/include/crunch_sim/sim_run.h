@@ -66,6 +66,9 @@ struct SimRunOptions {
   std::uint64_t seed = 1;   // replaces mapping.seed; seeds the physics rig's Hall noise too
   // progress and the hooks are called as runMapping calls them; the snapshot replaces the hooks.
   MappingOptions mapping;
+  // false: mapping.chain_fusion is replaced by the sensor's (pool for physics, else vote);
+  // true (`--chain-fusion` given, or a sweep's grid): mapping.chain_fusion is used as it is.
+  bool chain_fusion_given = false;
   // --snapshot K [--snapshot-temperature I] (render/blackboard_snapshot.h): K < poses.size(),
   // 0 <= I < schedule_steps, I only with K.
   std::optional<int> snapshot_pose;

@@ -47,6 +47,9 @@ struct ReversibleMoves {
   double leg_parent = 1.0;       // a leg: parent change (sampleParent's weights)
   double leg_table = 1.0;        // a leg: birth of a parent table, or death of its sole parent
   double table_jitter = 1.0;     // a table: Gaussian pose step, children carried half the time
+  // Birth of a table at a smart placement of a leg (the paper's proposeParent weights), adopting
+  // every orphan leg at its corners; or death of a table, orphaning its children.
+  double table_birth_death = 1.0;
 };
 
 struct SamplerOptions {
@@ -175,6 +178,18 @@ class Sampler {
   void rjJitterTable(int32_t id, double beta);
   // log q(table | leg) of rjLegTable's birth: 8 placements, each with a Gaussian step.
   double logTableBirthDensity(const Pose2& table, const Pose2& leg) const;
+  void rjTableBirthDeath(double beta);
+  // `at` lies within cornerLinkRadius of a corner of a table at `table`.
+  bool nearCorner(const Pose2& table, const Vec2& at) const;
+  // The orphan legs within cornerLinkRadius of a corner of a table at `pose`; false if more
+  // than kMaxChildren.
+  bool adoptable(const Pose2& pose, IdSet<4 * kMaxChildren>& out) const;
+  // log of the smart birth's density of a table at `pose` adopting `children` (sum over the
+  // children that could have proposed it), without the 1/n_legs of the proposer's choice.
+  double logSmartBirthDensity(const Pose2& pose, const IdSet<4 * kMaxChildren>& children) const;
+  // The 8 placements of a table with `leg` at a corner, and their smart weights (legs already
+  // near the other corners, SamplerOptions::smart_parent_gain).
+  void smartPlacements(int32_t leg, std::array<Pose2, 8>& place, std::array<double, 8>& weight) const;
   // sampleParent's weights for `leg` excluding `exclude`: candidates and weights (up to 16).
   int parentCandidates(const LegHyp& leg, int32_t exclude, std::array<int32_t, 16>& cand,
                        std::array<double, 16>& weight) const;
