@@ -56,7 +56,7 @@ std::string simReportJson(const Scene& scene, const SimRun& run, const SimRunOpt
   j["noise"] = {
       {"name", run.noise.name}, {"sigma_r", run.noise.sigma_r}, {"sigma_phi", run.noise.sigma_phi}};
   j["seed"] = options.seed;
-  j["accuracy"] = evaluationJson(run.evaluation);
+  j["accuracy"] = evaluationJson(run.evaluation, matchToleranceFor(run.model));
   j["counts"] = mapCountsJson(run.map);
   j["timings_s"] = {{"sense_and_infer", run.map.stats.wall_s}, {"total", total_s}};
   if (run.physics) j["physics"] = physicsJson(*run.physics);

@@ -75,7 +75,7 @@ PhysicsSummary physicsSummary(const SimScene& scene, const PhysicsSensorModel& s
   mopt.after_pose = nullptr;
   mopt.sampler.after_temperature = nullptr;
   const Map ref_map = runMapping(reference, scene.poses, scene.skipped, mopt).value();
-  ps.gaussian = evaluate(ref_map, scene.scene);
+  ps.gaussian = evaluate(ref_map, scene.scene, matchToleranceFor(mopt.model));
   ps.gaussian_s = ref_map.stats.wall_s;
   return ps;
 }
@@ -153,7 +153,7 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   SensorModel& used = locked ? static_cast<SensorModel&>(*locked) : chosen;
   run.map = runMapping(used, scene.poses, scene.skipped, mopt).value();  // validated above
   run.model = mopt.model;
-  run.evaluation = evaluate(run.map, scene.scene);
+  run.evaluation = evaluate(run.map, scene.scene, matchToleranceFor(mopt.model));
   if (recorder) run.snapshot = recorder->snapshot();
   if (o.snapshot_temperature && !run.snapshot) {
     const std::string k = std::to_string(*o.snapshot_pose);

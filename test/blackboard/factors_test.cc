@@ -125,3 +125,58 @@ TEST_CASE("Params: the object model by name (--model, recordings)", "[blackboard
   CHECK(std::string(objectModelName(ObjectModel::kPaper)) == "paper");
   CHECK(ModelParams{}.objects == ObjectModel::kPaper);
 }
+
+TEST_CASE("Factors: Delta_TL of a table of its own size, with the leg-width term",
+          "[blackboard]") {
+  ModelParams p;
+  p.objects = ObjectModel::kRooms;
+  TableHyp chair;
+  chair.pose = {1.0, 2.0, 0.0};
+  chair.width = 0.45;
+  chair.depth = 0.45;
+  chair.leg = 0.03;
+  LegHyp leg;
+  leg.pose = {1.0 + 0.21, 2.0 + 0.21, 0.0};  // exactly chair corner 0: (0.45 - 0.03) / 2
+  leg.side = 0.03;
+  int corner = -1;
+  CHECK(deltaTLSized(chair, leg, p, &corner) == Approx(0.0).margin(kTight));
+  CHECK(corner == 0);
+  // A leg 1 cm thicker than the chair's: (0.01 / sigma_w)^2 = 1.
+  leg.side = 0.04;
+  CHECK(deltaTLSized(chair, leg, p, &corner) == Approx(1.0).epsilon(kTight));
+  // The paper's one-size form puts that leg 0.0 + ... far from its corners.
+  CHECK(deltaTL(chair.pose, leg, p, nullptr) > 100.0);
+}
+
+TEST_CASE("Params: the size prior's range is validated, each field by name", "[blackboard]") {
+  ModelParams p;
+  CHECK(p.validate());
+  // Inside the range: one constant, the Occam factor log(2 pi 2 sigma_r^2 / A) +
+  // log(sqrt(2 pi) sigma_w / (leg_max - leg_min)), A = 0.7 * 1.7 - 0.7^2 / 2 = 0.945 m^2.
+  const double inside = std::log(2 * kPi * 2 * 1e-4 / 0.945) + std::log(std::sqrt(2 * kPi) * 0.01 / 0.06);
+  CHECK(p.logSizePrior(1.4, 0.7, 0.05) == 0.0);  // size_occam off (the default): uniform
+  ModelParams occam;
+  occam.size_occam = true;
+  CHECK(occam.logSizePrior(1.4, 0.7, 0.05) == Approx(inside));
+  CHECK(occam.logSizePrior(0.45, 0.45, 0.03) == Approx(inside));
+  CHECK(occam.logSizePrior(0.7, 1.4, 0.05) == Approx(inside));  // either side may be the longer
+  CHECK(p.logSizePrior(0.25, 0.45, 0.03) == -std::numeric_limits<double>::infinity());
+  CHECK(p.logSizePrior(2.1, 0.6, 0.05) == -std::numeric_limits<double>::infinity());
+  CHECK(p.logSizePrior(1.5, 1.2, 0.05) == -std::numeric_limits<double>::infinity());
+  CHECK(p.logSizePrior(0.6, 0.6, 0.09) == -std::numeric_limits<double>::infinity());
+  CHECK(p.logSizePrior(0.6, 0.6, 0.01) == -std::numeric_limits<double>::infinity());
+  const auto bad = [](auto&& change) {
+    ModelParams q;
+    change(q);
+    const Status s = q.validate();
+    return s ? std::string() : s.error().message;
+  };
+  CHECK(bad([](ModelParams& q) { q.size_min_side = 0.0; }).find("size_min_side") != std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.size_max_short = 0.2; }).find("size_max_short") !=
+        std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.size_max_long = 0.9; }).find("size_max_long") !=
+        std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.leg_min = -0.01; }).find("leg_min") != std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.leg_max = 0.2; }).find("leg_max") != std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.leg_max = 0.01; }).find("leg_max") != std::string::npos);
+}

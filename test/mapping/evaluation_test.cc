@@ -1,6 +1,7 @@
 #include "crunch/mapping/evaluation.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
 
 using crunch::Evaluation;
 using crunch::kPi;
@@ -168,4 +169,76 @@ TEST_CASE("Evaluation: an empty map of a furnished scene has recall 0", "[mappin
   CHECK(e.precision == 1.0);  // nothing claimed, nothing claimed wrongly
   CHECK(e.recall == 0.0);
   CHECK(e.f1 == 0.0);
+}
+
+namespace {
+MapTable sizedMapTable(double x, double y, double theta, double w, double d, double leg) {
+  MapTable t = makeMapTable(x, y, theta);
+  t.width = w;
+  t.depth = d;
+  t.leg = leg;
+  return t;
+}
+TableSpec sizedTable(double x, double y, double theta, double w, double d, double leg) {
+  TableSpec t = makeTable(x, y, theta);
+  t.width = w;
+  t.depth = d;
+  t.leg = leg;
+  return t;
+}
+MatchTolerance roomsTolerance() {
+  crunch::ModelParams p;
+  p.objects = crunch::ObjectModel::kRooms;
+  return crunch::matchToleranceFor(p);
+}
+}  // namespace
+
+TEST_CASE("Evaluation: with sizes judged, a table of the wrong size does not match", "[mapping]") {
+  Scene s = emptyScene();
+  s.tables.push_back(sizedTable(1.0, 1.0, 0.0, 0.45, 0.45, 0.03));
+  Map m;
+  m.tables.push_back(makeMapTable(1.0, 1.0, 0.0));  // the paper's 0.8 x 0.5 at the chair
+  CHECK(crunch::evaluate(m, s).matched == 1);        // sizes not judged: as before
+  CHECK(crunch::evaluate(m, s, roomsTolerance()).matched == 0);
+  m.tables[0] = sizedMapTable(1.0, 1.0, 0.0, 0.48, 0.44, 0.035);
+  const Evaluation e = crunch::evaluate(m, s, roomsTolerance());
+  CHECK(e.matched == 1);
+  CHECK(e.max_width_error == Approx(0.03));
+  CHECK(e.max_depth_error == Approx(0.01));
+  CHECK(e.mean_leg_error == Approx(0.005));
+  m.tables[0].width = 0.51;  // 6 cm over
+  CHECK(crunch::evaluate(m, s, roomsTolerance()).matched == 0);
+  CHECK(roomsTolerance().size == Approx(0.05));
+  CHECK_FALSE(std::isfinite(crunch::matchToleranceFor(crunch::ModelParams{}).size));
+}
+
+TEST_CASE("Evaluation: a w x d table at theta is the d x w one at theta + pi/2; a square's angle "
+          "means modulo pi/2",
+          "[mapping]") {
+  Scene s = emptyScene();
+  s.tables.push_back(sizedTable(1.0, 1.0, 0.1, 0.6, 1.0, 0.06));
+  s.tables.push_back(sizedTable(3.0, 1.0, 0.0, 0.45, 0.45, 0.03));
+  Map m;
+  m.tables.push_back(sizedMapTable(1.0, 1.0, 0.1 + kPi / 2, 1.0, 0.6, 0.06));
+  m.tables.push_back(sizedMapTable(3.0, 1.0, kPi / 2 + 0.05, 0.45, 0.45, 0.03));
+  const Evaluation e = crunch::evaluate(m, s, roomsTolerance());
+  CHECK(e.matched == 2);
+  CHECK(e.mean_angle_error == Approx(0.025));
+  CHECK(e.max_width_error == Approx(0.0).margin(1e-12));
+}
+
+TEST_CASE("Evaluation: one object reported as two, and two as one, are counted", "[mapping]") {
+  Scene s = emptyScene();
+  s.tables.push_back(sizedTable(1.5, 1.5, 0.0, 1.4, 0.7, 0.05));  // a desk
+  s.tables.push_back(sizedTable(1.0, 3.0, 0.0, 0.45, 0.45, 0.03));
+  s.tables.push_back(sizedTable(1.55, 3.0, 0.0, 0.45, 0.45, 0.03));  // two chairs side by side
+  Map m;
+  m.tables.push_back(sizedMapTable(1.1, 1.5, 0.0, 0.6, 0.6, 0.05));  // the desk as two chairs
+  m.tables.push_back(sizedMapTable(1.9, 1.5, 0.0, 0.6, 0.6, 0.05));
+  m.tables.push_back(sizedMapTable(1.275, 3.0, 0.0, 1.0, 0.45, 0.03));  // two chairs as a bench
+  const Evaluation e = crunch::evaluate(m, s, roomsTolerance());
+  CHECK(e.split_objects == 1);
+  CHECK(e.merged_objects == 1);
+  CHECK(e.matched == 0);
+  CHECK(crunch::evaluate(perfectMap(s), s).split_objects == 0);
 }

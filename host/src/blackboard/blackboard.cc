@@ -3,6 +3,7 @@
 #include <cassert>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace crunch {
 
@@ -71,9 +72,16 @@ void Blackboard::shapeletsNear(const Vec2& p, IdSet<64>& out) const {
 // ---------------------------------------------------------------- hypotheses
 
 int32_t Blackboard::addTable(const Pose2& pose) {
+  return addTable(pose, p_.table_width, p_.table_depth, p_.leg_side);
+}
+
+int32_t Blackboard::addTable(const Pose2& pose, double width, double depth, double leg) {
   const int32_t id = tables_.acquire();
   TableHyp& t = tables_[id];
   t.pose = pose;
+  t.width = width;
+  t.depth = depth;
+  t.leg = leg;
   t.alive = true;
   table_hash_.insert(id, pose.position());
   ++live_tables_;
@@ -81,10 +89,14 @@ int32_t Blackboard::addTable(const Pose2& pose) {
 }
 
 int32_t Blackboard::addLeg(const Pose2& pose, int32_t parent) {
+  return addLeg(pose, p_.leg_side, parent);
+}
+
+int32_t Blackboard::addLeg(const Pose2& pose, double side, int32_t parent) {
   const int32_t id = legs_.acquire();
   LegHyp& l = legs_[id];
   l.pose = pose;
-  l.side = p_.leg_side;
+  l.side = side;
   l.alive = true;
   leg_hash_.insert(id, pose.position());
   ++live_legs_;
@@ -92,9 +104,9 @@ int32_t Blackboard::addLeg(const Pose2& pose, int32_t parent) {
   return id;
 }
 
-int Blackboard::nearestCorner(const Pose2& table, const LegHyp& leg) const {
+int Blackboard::nearestCorner(const TableHyp& table, const LegHyp& leg) const {
   int corner = 0;
-  deltaTL(table, leg, p_, &corner);
+  deltaTLSized(table, leg, p_, &corner);
   return corner;
 }
 
@@ -102,7 +114,7 @@ void Blackboard::linkChild(int32_t table, int32_t leg) {
   TableHyp& t = tables_[table];
   LegHyp& l = legs_[leg];
   assert(t.alive && t.n_children < kMaxChildren);
-  const int corner = nearestCorner(t.pose, l);
+  const int corner = nearestCorner(t, l);
   l.parent = table;
   l.corner = static_cast<int8_t>(corner);
   t.children[t.n_children++] = leg;
@@ -179,15 +191,24 @@ void Blackboard::setParent(int32_t leg, int32_t parent) {
 }
 
 void Blackboard::moveTable(int32_t id, const Pose2& pose) {
+  const TableHyp& t = tables_[id];
+  reshapeTable(id, pose, t.width, t.depth, t.leg);
+}
+
+void Blackboard::reshapeTable(int32_t id, const Pose2& pose, double width, double depth,
+                              double leg) {
   TableHyp& t = tables_[id];
   table_hash_.remove(id, t.pose.position());
   t.pose = pose;
+  t.width = width;
+  t.depth = depth;
+  t.leg = leg;
   table_hash_.insert(id, pose.position());
   // Children keep their parent; their nearest corners may change.
   t.corner_count = {};
   for (int i = 0; i < t.n_children; ++i) {
     LegHyp& l = legs_[t.children[i]];
-    l.corner = static_cast<int8_t>(nearestCorner(t.pose, l));
+    l.corner = static_cast<int8_t>(nearestCorner(t, l));
     ++t.corner_count[static_cast<size_t>(l.corner)];
   }
 }
@@ -200,7 +221,7 @@ void Blackboard::moveLeg(int32_t id, const Pose2& pose) {
   if (l.parent != kNone) {
     TableHyp& t = tables_[l.parent];
     --t.corner_count[static_cast<size_t>(l.corner)];
-    l.corner = static_cast<int8_t>(nearestCorner(t.pose, l));
+    l.corner = static_cast<int8_t>(nearestCorner(t, l));
     ++t.corner_count[static_cast<size_t>(l.corner)];
   }
 }
@@ -217,31 +238,43 @@ void Blackboard::clear() {
 
 // ---------------------------------------------------------------- the log joint
 
-double Blackboard::freeTerm(const Pose2& pose) const {
+double Blackboard::freeTerm(const Pose2& pose, double side) const {
   if (!free_) return 0.0;
-  const int passes = free_->maxInSquare(pose, p_.leg_side, p_.free_margin);
+  const int passes = free_->maxInSquare(pose, side, p_.free_margin);
   return std::min(passes, p_.free_pass_cap) * std::log(p_.p_miss);
 }
 
-double Blackboard::tableFreeTerm(const Pose2& table) const {
+double Blackboard::tableFreeTerm(const TableHyp& table) const {
   if (!free_) return 0.0;
   double e = 0.0;
   for (int i = 0; i < 4; ++i) {
-    const Vec2 c = table.toWorld(p_.cornerOffset(i));
-    e += freeTerm({c.x(), c.y(), table.theta});
+    const Vec2 c = table.corner(i);
+    e += freeTerm({c.x(), c.y(), table.pose.theta}, table.leg);
   }
   return e;
+}
+
+double Blackboard::tableSizeTerm(const TableHyp& t) const {
+  return p_.sized() ? p_.logSizePrior(t.width, t.depth, t.leg) : 0.0;
+}
+
+double Blackboard::legSideTerm(const LegHyp& l) const {
+  return p_.sized() && !p_.legSideAllowed(l.side) ? -std::numeric_limits<double>::infinity()
+                                                  : 0.0;
 }
 
 double Blackboard::tableTerms(int32_t id, const Touched& t) const {
   const TableHyp& tab = tables_[id];
   if (!tab.alive) return 0.0;
-  double e = table_odds_ + tab.missingLegs() * log_eps_a_ + tableFreeTerm(tab.pose);
-  const OrientedRect rect = tableRect(tab.pose);
-  table_hash_.query(tab.pose.position(), 2.0 * rect.circumradius(), [&](int32_t o) {
+  double e = table_odds_ + tab.missingLegs() * log_eps_a_ + tableFreeTerm(tab);
+  if (p_.sized()) e += tableSizeTerm(tab);
+  const OrientedRect rect = tableRect(tab);
+  const double reach = p_.sized() ? rect.circumradius() + p_.maxTableCircumradius()
+                                  : 2.0 * rect.circumradius();
+  table_hash_.query(tab.pose.position(), reach, [&](int32_t o) {
     if (o == id || !tables_[o].alive) return;
     if (o < id && t.tables.contains(o)) return;  // pair counted from o's side
-    if (overlaps(rect, tableRect(tables_[o].pose))) e += log_eps_b_;
+    if (overlaps(rect, tableRect(tables_[o]))) e += log_eps_b_;
   });
   return e;
 }
@@ -250,10 +283,13 @@ double Blackboard::legTerms(int32_t id, const Touched& t) const {
   const LegHyp& l = legs_[id];
   if (!l.alive) return 0.0;
   const bool has_parent = l.parent != kNone;
-  const double dtl = has_parent ? deltaTL(tables_[l.parent].pose, l, p_, nullptr) : 0.0;
-  double e = logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(l.pose);
+  const double dtl = has_parent ? deltaTLSized(tables_[l.parent], l, p_, nullptr) : 0.0;
+  double e = logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(l.pose, l.side);
+  if (p_.sized()) e += legSideTerm(l);
   const OrientedRect rect = legRect(l);
-  leg_hash_.query(l.pose.position(), 2.0 * rect.circumradius(), [&](int32_t o) {
+  const double reach = p_.sized() ? rect.circumradius() + 0.5 * std::sqrt(2.0) * p_.maxLegSide()
+                                  : 2.0 * rect.circumradius();
+  leg_hash_.query(l.pose.position(), reach, [&](int32_t o) {
     if (o == id || !legs_[o].alive) return;
     if (o < id && t.legs.contains(o)) return;
     if (overlaps(rect, legRect(legs_[o]))) e += log_eps_b_;
@@ -296,17 +332,18 @@ double Blackboard::totalEnergy() const {
   for (int32_t i = 0; i < tables_.extent(); ++i) {
     const TableHyp& a = tables_[i];
     if (!a.alive) continue;
-    e += table_odds_ + a.missingLegs() * log_eps_a_ + tableFreeTerm(a.pose);
+    e += table_odds_ + a.missingLegs() * log_eps_a_ + tableFreeTerm(a) + tableSizeTerm(a);
     for (int32_t j = i + 1; j < tables_.extent(); ++j)
-      if (tables_[j].alive && overlaps(tableRect(a.pose), tableRect(tables_[j].pose)))
+      if (tables_[j].alive && overlaps(tableRect(a), tableRect(tables_[j])))
         e += log_eps_b_;
   }
   for (int32_t i = 0; i < legs_.extent(); ++i) {
     const LegHyp& a = legs_[i];
     if (!a.alive) continue;
     const bool has_parent = a.parent != kNone;
-    const double dtl = has_parent ? deltaTL(tables_[a.parent].pose, a, p_, nullptr) : 0.0;
-    e += logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(a.pose);
+    const double dtl = has_parent ? deltaTLSized(tables_[a.parent], a, p_, nullptr) : 0.0;
+    e += logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(a.pose, a.side) +
+         legSideTerm(a);
     for (int32_t j = i + 1; j < legs_.extent(); ++j) {
       const LegHyp& b = legs_[j];
       if (!b.alive) continue;

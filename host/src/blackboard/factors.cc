@@ -6,12 +6,15 @@
 
 namespace crunch {
 
-double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int* corner) {
+namespace {
+double deltaTLAt(const Pose2& table, double width, double depth, double leg_side,
+                    const LegHyp& leg, const ModelParams& p, int* corner) {
   double best = std::numeric_limits<double>::infinity();
   int best_i = 0;
   const Vec2 l = leg.pose.position();
   for (int i = 0; i < 4; ++i) {
-    const double d2 = (table.toWorld(p.cornerOffset(i)) - l).squaredNorm();
+    const double d2 =
+        (table.toWorld(ModelParams::cornerOffset(i, width, depth, leg_side)) - l).squaredNorm();
     if (d2 < best) {
       best = d2;
       best_i = i;
@@ -20,8 +23,17 @@ double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int*
   if (corner) *corner = best_i;
   const double dr = best / (p.sigma_r_leg * p.sigma_r_leg);
   const double dth = wrapPeriod(table.theta - leg.pose.theta, kPi / 2) / p.sigma_theta_leg;
-  const double dw = (p.leg_side - leg.side) / p.sigma_w;
+  const double dw = (leg_side - leg.side) / p.sigma_w;
   return dr + dth * dth + dw * dw;
+}
+}  // namespace
+
+double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int* corner) {
+  return deltaTLAt(table, p.table_width, p.table_depth, p.leg_side, leg, p, corner);
+}
+
+double deltaTLSized(const TableHyp& table, const LegHyp& leg, const ModelParams& p, int* corner) {
+  return deltaTLAt(table.pose, table.width, table.depth, table.leg, leg, p, corner);
 }
 
 double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {

@@ -1,5 +1,8 @@
 #include "crunch/blackboard/params.h"
 
+#include <algorithm>
+#include <limits>
+
 #include "crunch/core/range_check.h"
 
 namespace crunch {
@@ -11,6 +14,25 @@ Result<ObjectModel> objectModelByName(const std::string& name) {
 }
 
 const char* objectModelName(ObjectModel m) { return m == ObjectModel::kRooms ? "rooms" : "paper"; }
+
+double ModelParams::logSizePrior(double width, double depth, double leg) const {
+  const double lo = std::min(width, depth), hi = std::max(width, depth);
+  const bool ok = lo >= size_min_side && lo <= size_max_short && hi <= size_max_long &&
+                  legSideAllowed(leg) && 2.0 * leg < lo;
+  if (!ok) return -std::numeric_limits<double>::infinity();
+  if (!size_occam) return 0.0;
+  // The Occam factor of a free size (Laplace's approximation of the marginal over it): the
+  // posterior's volume over the prior's. Width and depth are each measured by two legs' centres
+  // (sd sqrt(2) sigma_r_leg each, eq. 10): volume (sqrt(2 pi) sqrt(2) sigma_r_leg)^2; the leg
+  // side by eq. 10's leg-width term: sqrt(2 pi) sigma_w. The prior's (width, depth) region
+  // {min_side <= shorter <= max_short, longer <= max_long} is counted once (w x d at theta is
+  // d x w at theta + pi/2), area (max_short - min)(max_long - min) - (max_short - min)^2 / 2.
+  const double a = size_max_short - size_min_side, b = size_max_long - size_min_side;
+  const double area = std::max(a * b - 0.5 * a * a, 1e-12);
+  const double wd = 2.0 * kPi * 2.0 * sigma_r_leg * sigma_r_leg;
+  const double lv = std::sqrt(2.0 * kPi) * sigma_w;
+  return std::log(wd / area) + std::log(std::min(1.0, lv / std::max(leg_max - leg_min, 1e-12)));
+}
 
 Status ModelParams::validate() const {
   const Status checks[] = {
@@ -34,7 +56,12 @@ Status ModelParams::validate() const {
       checkRange("link_sigmas", link_sigmas, 1.0, 20.0),
       checkAbove("p_miss", p_miss, 0.0, 1.0),
       checkCount("free_pass_cap", free_pass_cap, 0, 1000),
-      checkRange("free_margin", free_margin, 0.0, 0.5 * leg_side)};
+      checkRange("free_margin", free_margin, 0.0, 0.5 * leg_side),
+      checkRange("size_min_side", size_min_side, 0.05, 10.0),
+      checkRange("size_max_short", size_max_short, size_min_side, 10.0),
+      checkRange("size_max_long", size_max_long, size_max_short, 10.0),
+      checkAbove("leg_min", leg_min, 0.0, 0.5 * size_min_side),
+      checkRange("leg_max", leg_max, leg_min, 0.5 * size_min_side)};
   for (const Status& s : checks) {
     if (!s) return s;
   }

@@ -32,7 +32,9 @@ Status SamplerOptions::validate() const {
       checkAbove("rj_box_margin", rj_box_margin, 0.0, 1.0),
       checkAbove("rj_box_theta", rj_box_theta, 0.0, kPi / 4),
       checkCount("rj_steps_per_shapelet", rj_steps_per_shapelet, 1, 1000),
-      checkAbove("rj_cell", rj_cell, 0.0, 1.0)};
+      checkAbove("rj_cell", rj_cell, 0.0, 1.0),
+      checkRange("resize_sigma", resize_sigma, 0.0, 1.0),
+      checkRange("leg_side_sigma", leg_side_sigma, 0.0, 1.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
@@ -95,18 +97,29 @@ void Sampler::sweep(double beta) {
   for (int32_t id = 0; id < bb_.legExtent(); ++id)
     if (bb_.leg(id).alive) order_.push_back({false, id});
 
+  const bool sized = bb_.params().sized();
   for (const Ref& h : order_) {
     const double r = rng_.uniform();
     if (h.is_table) {
       if (!bb_.table(h.id).alive) continue;
       if (r < opt_.r1) deathTable(h.id, beta);
       else if (r < opt_.r3 && r >= opt_.r2) proposeChild(h.id, beta);
-      else jitterTable(h.id, beta);  // tables have only the null parent
+      else if (!sized) jitterTable(h.id, beta);  // tables have only the null parent
+      else {
+        // The rooms model shares the pose-move slot among pose, size and leg side.
+        const double u = rng_.uniform();
+        if (u < 0.4) jitterTable(h.id, beta);
+        else if (u < 0.85) resizeTable(h.id, beta);
+        else tableLegSide(h.id, beta);
+      }
     } else {
       if (!bb_.leg(h.id).alive) continue;
       if (r < opt_.r1) deathLeg(h.id, beta);
       else if (r < opt_.r2) parentChange(h.id, beta);
-      else if (r < opt_.r3) jitterLeg(h.id, beta);  // a leg's children are observations
+      else if (r < opt_.r3) {  // a leg's children are observations
+        if (sized && rng_.uniform() < 0.3) legSide(h.id, beta);
+        else jitterLeg(h.id, beta);
+      } else if (sized) proposeParentSized(h.id, beta);
       else proposeParent(h.id, beta);
     }
   }
@@ -150,12 +163,14 @@ int Sampler::parentCandidates(const LegHyp& leg, int32_t exclude, std::array<int
   int n = 0;
   cand[n] = kNone;
   weight[n++] = exclude == kNone ? 0.0 : p.c_L;
-  const double reach = bb_.tableRect({}).circumradius() + p.cornerLinkRadius();
+  const double reach =
+      (p.sized() ? p.maxTableCircumradius() : bb_.tableRect(Pose2{}).circumradius()) +
+      p.cornerLinkRadius();
   const double cut = p.link_sigmas * p.link_sigmas;
   bb_.tablesNear(leg.pose.position(), reach, [&](int32_t t) {
     const TableHyp& tab = bb_.table(t);
     if (t == exclude || !tab.alive || n >= kMaxCand || tab.n_children >= kMaxChildren) return;
-    const double d = deltaTL(tab.pose, leg, p, nullptr);
+    const double d = deltaTLSized(tab, leg, p, nullptr);
     if (d > cut) return;
     cand[n] = t;
     weight[n++] = p.alpha_L * std::exp(-d);
@@ -174,17 +189,24 @@ Vec2 inwardNormal(const Shapelet& s) {
 
 void Sampler::primeLeg(int slot, double beta) {
   const Shapelet& s = bb_.shapelet(slot);
-  if (!legCanCause(bb_.params().leg_side, s)) return;  // no leg's face is that long
+  const ModelParams& p = bb_.params();
+  if (!legCanCause(p.maxLegSide(), s)) return;  // no leg's face is that long
+  // The rooms model's legs are born with the standard side (or the least side that holds the
+  // contact's face span), so legs of one object agree and a table over them pays; side moves
+  // (legSide, tableLegSide) refine it. A side drawn from the prior's range instead places each
+  // leg's centre for a different side, and eq. 10's leg-width term keeps their table from paying.
+  const double side =
+      p.sized() ? std::clamp(std::max(p.leg_side, s.face_span / std::sqrt(2.0)), p.leg_min, p.leg_max)
+                : p.leg_side;
   LegHyp probe;
-  probe.pose = s.oriented ? legOnFace(s) : legAtPoint(s);
-  probe.side = bb_.params().leg_side;
+  probe.pose = s.oriented ? legOnFace(s, side) : legAtPoint(s, side);
+  probe.side = side;
   const int32_t parent = sampleParent(probe, kNone);
-  proposeLegBirth(probe.pose, parent, beta);
+  proposeLegBirth(probe.pose, side, parent, beta);
 }
 
-Pose2 Sampler::legOnFace(const Shapelet& s) {
-  const ModelParams& p = bb_.params();
-  const double half = 0.5 * p.leg_side;
+Pose2 Sampler::legOnFace(const Shapelet& s, double side) {
+  const double half = 0.5 * side;
   const Vec2 along{std::cos(s.phi), std::sin(s.phi)};
   const Vec2 in = inwardNormal(s);
   // Q(pa(S)): a leg whose face passes through the shapelet. Where another shapelet nearby lies on
@@ -197,7 +219,7 @@ Pose2 Sampler::legOnFace(const Shapelet& s) {
     for (int32_t o : near.span()) {
       const Shapelet& so = bb_.shapelet(o);
       if (!so.oriented || std::abs(wrapPeriod(so.phi - s.phi, kPi)) < kPi / 4) continue;
-      if (std::hypot(so.x - s.x, so.y - s.y) > 2.0 * p.leg_side) continue;
+      if (std::hypot(so.x - s.x, so.y - s.y) > 2.0 * side) continue;
       if (partner < 0 || rng_.uniform() < 0.5) partner = o;
     }
   }
@@ -218,12 +240,11 @@ Pose2 Sampler::legOnFace(const Shapelet& s) {
   return {c.x(), c.y(), wrapPeriod(s.phi + rng_.normal(0, opt_.prime_sigma_theta), kPi / 2)};
 }
 
-Pose2 Sampler::legAtPoint(const Shapelet& s) {
+Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
   // An edge or point contact (no orientation): the leg lies beyond the point as seen from the
   // whisker, its centre between a face's and a corner's distance from it, turned as the legs
   // already believed around it say (axisFromLegs), or any way.
-  const ModelParams& p = bb_.params();
-  const double half = 0.5 * p.leg_side;
+  const double half = 0.5 * side;
   Vec2 away = Vec2{s.x - s.ox, s.y - s.oy};
   away = away.norm() > 0.0 ? Vec2(away.normalized()) : Vec2{1.0, 0.0};
   const Vec2 c = Vec2{s.x, s.y} + rng_.uniform(half, half * std::sqrt(2.0)) * away +
@@ -243,20 +264,28 @@ double Sampler::axisFromLegs(const Vec2& c, int32_t self, double fallback) {
   const double tol = 2.0 * p.leg_side;
   double axis = fallback;
   int seen = 0;
+  // The rooms model knows no one size: a partner at any distance a side of the prior's range
+  // can span is taken as lying along a side (a diagonal partner then gives a wrong axis, which
+  // its move's acceptance judges).
+  const double side_lo = p.size_min_side - p.leg_max - tol;
+  const double reach = p.sized() ? std::hypot(p.size_max_long, p.size_max_short) : diag + tol;
   const auto consider = [&](const Vec2& other) {
     const Vec2 v = other - c;
     const double len = v.norm(), dir = std::atan2(v.y(), v.x());
     double a;
-    if (std::abs(len - w) < tol || std::abs(len - d) < tol) a = dir;
+    if (p.sized()) {
+      if (len < side_lo || len > p.size_max_long) return;
+      a = dir;
+    } else if (std::abs(len - w) < tol || std::abs(len - d) < tol) a = dir;
     else if (std::abs(len - diag) < tol) a = dir + (rng_.uniform() < 0.5 ? -diag_angle : diag_angle);
     else return;
     if (rng_.uniform() * ++seen < 1.0) axis = a;
   };
-  bb_.legsNear(c, diag + tol, [&](int32_t o) {
+  bb_.legsNear(c, reach, [&](int32_t o) {
     const LegHyp& l = bb_.leg(o);
     if (o != self && l.alive) consider(l.pose.position());
   });
-  bb_.shapeletsWithin(c, diag + tol, [&](int32_t slot) {
+  bb_.shapeletsWithin(c, reach, [&](int32_t slot) {
     const Shapelet& sh = bb_.shapelet(slot);
     if (!sh.oriented) consider({sh.x, sh.y});
   });
@@ -285,13 +314,13 @@ bool Sampler::pointSupported(const Vec2& c) const {
   return any;
 }
 
-void Sampler::proposeLegBirth(const Pose2& pose, int32_t parent, double beta) {
+void Sampler::proposeLegBirth(const Pose2& pose, double side, int32_t parent, double beta) {
   Touched t;
   t.tables.add(parent);
   bb_.shapeletsNear(pose.position(), t.shapelets);
   begin();
   const double e0 = bb_.localEnergy(t);
-  const int32_t id = bb_.addLeg(pose, parent);
+  const int32_t id = bb_.addLeg(pose, side, parent);
   t.legs.add(id);
   const double e1 = bb_.localEnergy(t);
   if (!decide(e1 - e0, beta)) {
@@ -413,8 +442,8 @@ void Sampler::proposeChild(int32_t table, double beta) {
     if (tab.corner_count[static_cast<size_t>(c)] == 0) missing[static_cast<size_t>(n++)] = c;
   if (n == 0) return;
   const int corner = missing[rng_.below(static_cast<uint32_t>(n))];
-  const Vec2 c = tab.pose.toWorld(bb_.params().cornerOffset(corner));
-  proposeLegBirth({c.x(), c.y(), wrapPeriod(tab.pose.theta, kPi / 2)}, table, beta);
+  const Vec2 c = tab.corner(corner);
+  proposeLegBirth({c.x(), c.y(), wrapPeriod(tab.pose.theta, kPi / 2)}, tab.leg, table, beta);
 }
 
 void Sampler::proposeParent(int32_t leg, double beta) {
@@ -548,6 +577,12 @@ void Sampler::prune() {
     bb_.killLeg(id);
     bb_.releaseLeg(id);
   }
+}
+
+void Sampler::mapTables(std::vector<TableHyp>& out) const {
+  out.clear();
+  for (int32_t id = 0; id < bb_.tableExtent(); ++id)
+    if (bb_.table(id).alive) out.push_back(bb_.table(id));
 }
 
 void Sampler::mapTables(std::vector<Pose2>& out) const {
@@ -1083,6 +1118,267 @@ void Sampler::rjTableBirthDeath(double beta) {
                          logSmartBirthDensity(pose, kids);
   if (decideRj(e1 - e0, beta, log_rev + log_cell - log_fwd)) bb_.releaseTable(table);
   else bb_.reviveTable(table);
+}
+
+// ---------------------------------------------------------------- the rooms model's size moves
+//
+// Each move below writes log_q_ratio = log q(reverse) - log q(forward), the proposal's part of a
+// Metropolis-Hastings ratio, where it can be computed. Sampler::decide does not use it yet (the
+// reversible-jump acceptance is another change); it is here so that change can.
+
+void Sampler::resizeTable(int32_t id, double beta) {
+  const ModelParams& p = bb_.params();
+  const TableHyp old = bb_.table(id);
+  // One corner's leg centre stays where it is; the opposite sides move. A step on the width, the
+  // depth or both (each a third of the time).
+  const int k = static_cast<int>(rng_.below(4));
+  const uint32_t which = rng_.below(3);
+  const double w = old.width + (which != 1 ? rng_.normal(0, opt_.resize_sigma) : 0.0);
+  const double d = old.depth + (which != 0 ? rng_.normal(0, opt_.resize_sigma) : 0.0);
+  if (!std::isfinite(p.logSizePrior(w, d, old.leg))) return;  // outside the prior: rejected
+  const Vec2 fixed = old.corner(k);
+  const Vec2 off = Pose2{0, 0, old.pose.theta}.toWorld(ModelParams::cornerOffset(k, w, d, old.leg));
+  const Pose2 pose{fixed.x() - off.x(), fixed.y() - off.y(), old.pose.theta};
+  // Symmetric: the corner and the branch are drawn independently of the state, the Gaussian step
+  // is symmetric, and from the new state the same corner and the negated step give back the old
+  // one (corner k's world position is unchanged by construction). The map (pose, w, d) ->
+  // (pose', w', d') for a given step is a translation: Jacobian 1.
+  [[maybe_unused]] const double log_q_ratio = 0.0;
+  Touched t;
+  t.tables.add(id);
+  for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.reshapeTable(id, pose, w, d, old.leg);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+}
+
+void Sampler::tableLegSide(int32_t id, double beta) {
+  const ModelParams& p = bb_.params();
+  const TableHyp old = bb_.table(id);
+  const double leg = old.leg + rng_.normal(0, opt_.leg_side_sigma);
+  if (!std::isfinite(p.logSizePrior(old.width, old.depth, leg))) return;
+  // Symmetric Gaussian step on one parameter: log q(reverse) = log q(forward).
+  [[maybe_unused]] const double log_q_ratio = 0.0;
+  Touched t;
+  t.tables.add(id);
+  for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.reshapeTable(id, old.pose, old.width, old.depth, leg);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+}
+
+void Sampler::legSide(int32_t id, double beta) {
+  const ModelParams& p = bb_.params();
+  const LegHyp& l = bb_.leg(id);
+  const double old = l.side;
+  const double side = old + rng_.normal(0, opt_.leg_side_sigma);
+  if (!p.legSideAllowed(side)) return;
+  // Symmetric Gaussian step on one parameter.
+  [[maybe_unused]] const double log_q_ratio = 0.0;
+  Touched t;
+  t.legs.add(id);
+  t.tables.add(l.parent);
+  bb_.shapeletsNear(l.pose.position(), t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  bb_.setLegSide(id, side);
+  const double e1 = bb_.localEnergy(t);
+  if (!decide(e1 - e0, beta)) bb_.setLegSide(id, old);
+}
+
+double Sampler::priorSpan(double leg_side, double other) {
+  const ModelParams& p = bb_.params();
+  // A side drawn uniformly from the prior's range (the shorter side's bound applies when the
+  // other side is already long), as a signed centre-to-centre span.
+  const double hi = std::abs(other) + leg_side > p.size_max_short ? p.size_max_short
+                                                                  : p.size_max_long;
+  const double side = rng_.uniform(p.size_min_side, hi);
+  return (rng_.uniform() < 0.5 ? -1.0 : 1.0) * (side - leg_side);
+}
+
+void Sampler::proposeParentSized(int32_t leg, double beta) {
+  const ModelParams& p = bb_.params();
+  const LegHyp l = bb_.leg(leg);
+  const Vec2 c = l.pose.position();
+  const bool free_turn = opt_.smart_parent && pointSupported(c);
+  const double axis = free_turn ? axisFromLegs(c, leg, l.pose.theta) : l.pose.theta;
+  const Vec2 u{std::cos(axis), std::sin(axis)}, v{-std::sin(axis), std::cos(axis)};
+  // Partners: other legs, and point contacts (they come before their legs), around the leg. One
+  // on the leg's u axis at a side's span gives the table's side along u; one on its v axis the
+  // side along v; one off both axes at spans both sides allow gives the whole rectangle. Spans
+  // are centre to centre: a side is its span plus a leg side.
+  const double lo = p.size_min_side - l.side, hi = p.size_max_long - l.side;
+  const double tol = p.cornerLinkRadius() * 0.5 + 0.5 * p.maxLegSide();
+  std::array<double, 8> su{}, sv{}, du{}, dv{};
+  int nu = 0, nv = 0, nd = 0;
+  const auto consider = [&](const Vec2& q) {
+    const double a = (q - c).dot(u), b = (q - c).dot(v);
+    const bool a_span = std::abs(a) >= lo && std::abs(a) <= hi;
+    const bool b_span = std::abs(b) >= lo && std::abs(b) <= hi;
+    if (std::abs(b) < tol && a_span && nu < 8) su[static_cast<size_t>(nu++)] = a;
+    else if (std::abs(a) < tol && b_span && nv < 8) sv[static_cast<size_t>(nv++)] = b;
+    else if (a_span && b_span && nd < 8) {
+      du[static_cast<size_t>(nd)] = a;
+      dv[static_cast<size_t>(nd++)] = b;
+    }
+  };
+  if (opt_.smart_parent) {
+    const double reach = std::hypot(p.size_max_long, p.size_max_short);
+    bb_.legsNear(c, reach, [&](int32_t o) {
+      const LegHyp& ol = bb_.leg(o);
+      if (o != leg && ol.alive) consider(ol.pose.position());
+    });
+    bb_.shapeletsWithin(c, reach, [&](int32_t slot) {
+      const Shapelet& sh = bb_.shapelet(slot);
+      if (!sh.oriented && (Vec2{sh.x, sh.y} - c).norm() > tol) consider({sh.x, sh.y});
+    });
+  }
+  // Candidate rectangles: every u-partner (or a prior draw when there is none) crossed with every
+  // v-partner (or a prior draw), and every diagonal partner. Each is weighted as proposeParent weights its
+  // placements: 1 plus smart_parent_gain for each of its other corners where a leg or a point
+  // contact stands, so the rectangle that the evidence supports at most corners is likeliest
+  // (a chair's own legs rather than a leg of the desk beside it).
+  // A side no partner gives is drawn from the prior.
+  if (nu == 0) su[static_cast<size_t>(nu++)] = priorSpan(l.side, 0.0);
+  if (nv == 0) sv[static_cast<size_t>(nv++)] = priorSpan(l.side, su[0]);
+  const int mu = nu, mv = nv;
+  constexpr int kMaxCand = 8 * 8 + 8;
+  std::array<double, kMaxCand> cx, cy, cw;
+  int nc = 0;
+  double total = 0.0;
+  const double r = p.cornerLinkRadius();
+  const auto add = [&](double a, double b) {
+    const double w = std::abs(a) + l.side, d = std::abs(b) + l.side;
+    if (!std::isfinite(p.logSizePrior(w, d, l.side))) return;
+    double weight = 1.0;
+    if (opt_.smart_parent) {
+      // The other three corners: (a, 0), (0, b), (a, b) from the leg.
+      const Vec2 corners[3] = {c + a * u, c + b * v, c + a * u + b * v};
+      for (const Vec2& k : corners) {
+        bool hit = pointNear(k, r);  // a point contact is evidence of a leg there
+        if (!hit) {
+          bb_.legsNear(k, r, [&](int32_t o) {
+            const LegHyp& ol = bb_.leg(o);
+            if (o != leg && ol.alive && (ol.pose.position() - k).squaredNorm() <= r * r) hit = true;
+          });
+        }
+        if (hit) weight += opt_.smart_parent_gain;
+      }
+    }
+    cx[static_cast<size_t>(nc)] = a;
+    cy[static_cast<size_t>(nc)] = b;
+    cw[static_cast<size_t>(nc++)] = weight;
+    total += weight;
+  };
+  for (int i = 0; i < mu; ++i)
+    for (int j = 0; j < mv; ++j) add(su[static_cast<size_t>(i)], sv[static_cast<size_t>(j)]);
+  for (int i = 0; i < nd; ++i) add(du[static_cast<size_t>(i)], dv[static_cast<size_t>(i)]);
+  if (nc == 0) return;  // no rectangle the prior allows
+  double pick = rng_.uniform() * total;
+  int k = 0;
+  while (k < nc - 1 && (pick -= cw[static_cast<size_t>(k)]) >= 0.0) ++k;
+  const double sx = cx[static_cast<size_t>(k)], sy = cy[static_cast<size_t>(k)];
+  const double w = std::abs(sx) + l.side, d = std::abs(sy) + l.side;
+  if (!std::isfinite(p.logSizePrior(w, d, l.side))) return;  // outside the prior: rejected
+  const Vec2 centre = c + 0.5 * sx * u + 0.5 * sy * v;
+  const Pose2 pose{centre.x(), centre.y(), wrapPeriod(axis, kPi)};
+  // log_q_ratio is not computed for this move: its forward density is a mixture over the
+  // partners found (and the prior draws where none is taken), and its reverse is a table death
+  // together with the re-parenting of every adopted leg, which no single move proposes. The
+  // paper's proposeParent has the same structure; the reversible-jump change pairs them.
+
+  // As proposeParent: legs at the other corners join the new table in the same move; a table
+  // left without legs dies in it; legs only point contacts support turn with the table.
+  TableHyp shape;
+  shape.pose = pose;
+  shape.width = w;
+  shape.depth = d;
+  shape.leg = l.side;
+  IdSet<4> adopt;
+  if (opt_.smart_parent) {
+    for (int corner_i = 0; corner_i < 4; ++corner_i) {
+      const Vec2 corner = shape.corner(corner_i);
+      bb_.legsNear(corner, r, [&](int32_t o) {
+        const LegHyp& ol = bb_.leg(o);
+        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= r * r)
+          adopt.add(o);
+      });
+    }
+  }
+  std::array<int32_t, 4> adopt_parent;
+  std::array<double, 5> old_side;  // the seed leg's, then the adopted legs'
+  Touched t;
+  t.legs.add(leg);
+  t.tables.add(l.parent);
+  // One table has one leg side: the new table's is the mean of its legs' and they all take it in
+  // the same move (legs born with sides drawn from the prior rarely agree, and eq. 10's leg-width
+  // term would keep their table from paying).
+  double side_sum = l.side;
+  old_side[0] = l.side;
+  bb_.shapeletsNear(c, t.shapelets);
+  for (int i = 0; i < adopt.n; ++i) {
+    adopt_parent[static_cast<size_t>(i)] = bb_.leg(adopt.ids[i]).parent;
+    t.legs.add(adopt.ids[i]);
+    t.tables.add(adopt_parent[static_cast<size_t>(i)]);
+    old_side[static_cast<size_t>(i + 1)] = bb_.leg(adopt.ids[i]).side;
+    side_sum += bb_.leg(adopt.ids[i]).side;
+    bb_.shapeletsNear(bb_.leg(adopt.ids[i]).pose.position(), t.shapelets);
+  }
+  const double table_leg = side_sum / (adopt.n + 1);
+  // Spans centre to centre stay: the top grows with the leg side.
+  const double tw = std::abs(sx) + table_leg, td = std::abs(sy) + table_leg;
+  if (!std::isfinite(p.logSizePrior(tw, td, table_leg))) return;
+  for (int32_t tab : t.tables.span())
+    for (int i = 0; i < bb_.table(tab).n_children; ++i) t.legs.add(bb_.table(tab).children[i]);
+  // A leg that turns with the table changes its shapelets' kernels.
+  if (free_turn)
+    for (int32_t o : t.legs.span())
+      if (pointSupported(bb_.leg(o).pose.position()))
+        bb_.shapeletsNear(bb_.leg(o).pose.position(), t.shapelets);
+  begin();
+  const double e0 = bb_.localEnergy(t);
+  const int32_t table = bb_.addTable(pose, tw, td, table_leg);
+  bb_.setLegSide(leg, table_leg);
+  for (int32_t o : adopt.span()) bb_.setLegSide(o, table_leg);
+  bb_.setParent(leg, table);
+  for (int32_t o : adopt.span()) bb_.setParent(o, table);
+  IdSet<5> turned;
+  std::array<Pose2, 5> turned_from;
+  if (free_turn) {
+    for (int32_t o : t.legs.span()) {
+      if (bb_.leg(o).parent != table || !pointSupported(bb_.leg(o).pose.position())) continue;
+      turned_from[static_cast<size_t>(turned.n)] = bb_.leg(o).pose;
+      turned.add(o);
+      Pose2 q = bb_.leg(o).pose;
+      q.theta = wrapPeriod(pose.theta, kPi / 2);
+      bb_.moveLeg(o, q);
+    }
+  }
+  IdSet<8> emptied;
+  for (int32_t tab : t.tables.span()) {
+    if (bb_.table(tab).n_children == 0) {
+      emptied.add(tab);
+      bb_.killTable(tab);
+    }
+  }
+  t.tables.add(table);
+  const double e1 = bb_.localEnergy(t);
+  if (decide(e1 - e0, beta)) {
+    for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
+    return;
+  }
+  for (int i = 0; i < turned.n; ++i) bb_.moveLeg(turned.ids[i], turned_from[static_cast<size_t>(i)]);
+  for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
+  bb_.setParent(leg, l.parent);
+  for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
+  bb_.setLegSide(leg, old_side[0]);
+  for (int i = 0; i < adopt.n; ++i) bb_.setLegSide(adopt.ids[i], old_side[static_cast<size_t>(i + 1)]);
+  bb_.killTable(table);
+  bb_.releaseTable(table);
 }
 
 }  // namespace crunch

@@ -18,10 +18,47 @@ double centreDistance(const MapTable& mapped, const TableSpec& truth) {
 double angleError(const MapTable& mapped, const TableSpec& truth) {
   return std::abs(wrapPeriod(mapped.pose.theta - truth.pose.theta, kPi));
 }
+
+// The real table written width >= depth (turned a quarter when its depth is the longer side).
+TableSpec canonical(const TableSpec& t) {
+  TableSpec c = t;
+  if (c.depth > c.width) {
+    std::swap(c.width, c.depth);
+    c.pose.theta += kPi / 2;
+  }
+  return c;
+}
+
+bool judgesSize(const MatchTolerance& tol) { return std::isfinite(tol.size); }
+
+// Orientation error with sizes: modulo pi/2 when both are square within the tolerance.
+double sizedAngleError(const MapTable& mapped, const TableSpec& truth, double tol_size) {
+  const TableSpec c = canonical(truth);
+  const bool square = std::abs(mapped.width - mapped.depth) <= tol_size &&
+                      std::abs(c.width - c.depth) <= tol_size;
+  return std::abs(wrapPeriod(mapped.pose.theta - c.pose.theta, square ? kPi / 2 : kPi));
+}
+
+bool contains(const TableSpec& t, const Vec2& p) {
+  const Vec2 q = t.pose.toLocal(p);
+  return std::abs(q.x()) <= 0.5 * t.width && std::abs(q.y()) <= 0.5 * t.depth;
+}
 }  // namespace
 
+MatchTolerance matchToleranceFor(const ModelParams& model) {
+  MatchTolerance tol;
+  if (model.sized()) tol.size = 0.05;
+  return tol;
+}
+
 bool tableMatches(const MapTable& mapped, const TableSpec& truth, const MatchTolerance& tol) {
-  return centreDistance(mapped, truth) <= tol.position && angleError(mapped, truth) <= tol.angle;
+  if (!judgesSize(tol))
+    return centreDistance(mapped, truth) <= tol.position && angleError(mapped, truth) <= tol.angle;
+  const TableSpec c = canonical(truth);
+  return centreDistance(mapped, truth) <= tol.position &&
+         sizedAngleError(mapped, truth, tol.size) <= tol.angle &&
+         std::abs(mapped.width - c.width) <= tol.size &&
+         std::abs(mapped.depth - c.depth) <= tol.size && std::abs(mapped.leg - c.leg) <= tol.size;
 }
 
 Evaluation evaluate(const Map& map, const Scene& scene, const MatchTolerance& tol) {
@@ -53,7 +90,34 @@ Evaluation evaluate(const Map& map, const Scene& scene, const MatchTolerance& to
     fused_used[p.fused] = truth_used[p.truth] = true;
     ++ev.matched;
     position_sum += p.distance;
-    angle_sum += angleError(map.tables[p.fused], scene.tables[p.truth]);
+    const MapTable& m = map.tables[p.fused];
+    const TableSpec c = canonical(scene.tables[p.truth]);
+    angle_sum += judgesSize(tol) ? sizedAngleError(m, scene.tables[p.truth], tol.size)
+                                 : angleError(m, scene.tables[p.truth]);
+    const double ew = std::abs(m.width - c.width), ed = std::abs(m.depth - c.depth),
+                 el = std::abs(m.leg - c.leg);
+    ev.mean_width_error += ew;
+    ev.mean_depth_error += ed;
+    ev.mean_leg_error += el;
+    ev.max_width_error = std::max(ev.max_width_error, ew);
+    ev.max_depth_error = std::max(ev.max_depth_error, ed);
+    ev.max_leg_error = std::max(ev.max_leg_error, el);
+  }
+  if (ev.matched > 0) {
+    ev.mean_width_error /= ev.matched;
+    ev.mean_depth_error /= ev.matched;
+    ev.mean_leg_error /= ev.matched;
+  }
+  for (const TableSpec& truth : scene.tables) {
+    int inside = 0;
+    for (const MapTable& m : map.tables) inside += contains(truth, m.pose.position());
+    ev.split_objects += inside >= 2;
+  }
+  for (const MapTable& m : map.tables) {
+    const TableSpec top{m.pose, m.width, m.depth, m.leg};
+    int inside = 0;
+    for (const TableSpec& truth : scene.tables) inside += contains(top, truth.pose.position());
+    ev.merged_objects += inside >= 2;
   }
 
   ev.precision = ev.fused_tables == 0 ? 1.0 : static_cast<double>(ev.matched) / ev.fused_tables;

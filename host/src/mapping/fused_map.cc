@@ -11,7 +11,8 @@ Status FuseOptions::validate() const {
   const Status checks[] = {checkAbove("radius", radius, 0.0, 10.0),
                            checkAbove("angle", angle, 0.0, kPi),
                            checkCount("min_support", min_support, 1, 1000000),
-                           checkAbove("reach", reach, 0.0, 10.0)};
+                           checkAbove("reach", reach, 0.0, 10.0),
+                           checkAbove("size", size, 0.0, 10.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
@@ -22,6 +23,7 @@ namespace {
 struct Item {
   Pose2 pose;
   bool used = false;
+  MapTable table;  // with its size (compared when FuseOptions::compare_sizes)
 };
 
 // Mean pose of `members`; angles modulo pi averaged as doubled angles on the circle.
@@ -38,12 +40,39 @@ Pose2 meanPose(const std::vector<Item>& items, const std::vector<size_t>& member
   if (th < 0) th += kPi;
   return {x / n, y / n, th};
 }
+
+// The mean of a cluster of sized tables: mean pose and sizes; a near-square cluster averages
+// its angles modulo pi/2 (quadrupled angles), each member first turned to within pi/4 of it.
+MapTable meanTable(const std::vector<Item>& items, const std::vector<size_t>& members,
+                   const FuseOptions& opt) {
+  MapTable t;
+  t.pose = meanPose(items, members);
+  double w = 0, d = 0, l = 0;
+  for (size_t i : members) {
+    w += items[i].table.width;
+    d += items[i].table.depth;
+    l += items[i].table.leg;
+  }
+  const double n = static_cast<double>(members.size());
+  t.width = w / n;
+  t.depth = d / n;
+  t.leg = l / n;
+  if (nearSquare(t, opt.size)) {
+    double c = 0, s = 0;
+    for (size_t i : members) {
+      c += std::cos(4 * items[i].pose.theta);
+      s += std::sin(4 * items[i].pose.theta);
+    }
+    t.pose.theta = wrapHalfTurn(0.25 * std::atan2(s, c));
+  }
+  return t;
+}
 }  // namespace
 
 std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const FuseOptions& opt) {
   std::vector<Item> items;
   for (const PoseMap& pm : per_pose)
-    for (const MapTable& t : pm.tables) items.push_back({t.pose});
+    for (const MapTable& t : pm.tables) items.push_back({t.pose, false, t});
 
   // Greedy: seed each cluster at the item with the most unused neighbours, take its neighbours,
   // re-centre once on their mean and take the neighbours of the mean.
@@ -55,7 +84,7 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
     for (size_t i = 0; i < items.size(); ++i) {
       if (items[i].used) continue;
       int count = 0;
-      for (const Item& o : items) count += (!o.used && tablesAgree(items[i].pose, o.pose, opt));
+      for (const Item& o : items) count += (!o.used && tablesAgree(items[i].table, o.table, opt));
       if (count > best_count) {
         best_count = count;
         best = i;
@@ -64,15 +93,17 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
     if (best == items.size() || best_count < opt.min_support) break;
     members.clear();
     for (size_t j = 0; j < items.size(); ++j)
-      if (!items[j].used && tablesAgree(items[best].pose, items[j].pose, opt)) members.push_back(j);
-    const Pose2 centre = meanPose(items, members);
+      if (!items[j].used && tablesAgree(items[best].table, items[j].table, opt)) members.push_back(j);
+    const MapTable centre = opt.compare_sizes ? meanTable(items, members, opt)
+                                              : MapTable{meanPose(items, members)};
     std::vector<size_t> refined;
     for (size_t j = 0; j < items.size(); ++j)
-      if (!items[j].used && tablesAgree(centre, items[j].pose, opt)) refined.push_back(j);
+      if (!items[j].used && tablesAgree(centre, items[j].table, opt)) refined.push_back(j);
     if (refined.size() >= members.size()) members = refined;
     for (size_t j : members) items[j].used = true;
     MapTable t;
-    t.pose = meanPose(items, members);
+    if (opt.compare_sizes) t = meanTable(items, members, opt);
+    else t.pose = meanPose(items, members);
     t.support = static_cast<int>(members.size());
     clusters.push_back(t);
   }
@@ -88,6 +119,15 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
 
   scoreBySupport(fused, per_pose, opt);
   return fused;
+}
+
+bool tablesAgree(const MapTable& a, const MapTable& b, const FuseOptions& opt) {
+  if (!opt.compare_sizes) return tablesAgree(a.pose, b.pose, opt);
+  if (std::abs(a.width - b.width) > opt.size || std::abs(a.depth - b.depth) > opt.size)
+    return false;
+  const double period = nearSquare(a, opt.size) && nearSquare(b, opt.size) ? kPi / 2 : kPi;
+  return std::hypot(a.pose.x - b.pose.x, a.pose.y - b.pose.y) <= opt.radius &&
+         std::abs(wrapPeriod(a.pose.theta - b.pose.theta, period)) <= opt.angle;
 }
 
 bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt) {

@@ -48,8 +48,17 @@ std::string mapToJson(const Map& map) {
   for (const PoseMap& pm : map.per_pose) {
     OrderedJson pose_tables = OrderedJson::array();
     for (const MapTable& t : pm.tables) {
-      pose_tables.push_back(
-          {{"x", t.pose.x}, {"y", t.pose.y}, {"theta", normaliseTableTheta(t.pose.theta)}});
+      OrderedJson pt = {
+          {"x", t.pose.x}, {"y", t.pose.y}, {"theta", normaliseTableTheta(t.pose.theta)}};
+      // A size only where it is not the standard one (the rooms model's objects; the paper's
+      // per-pose tables are written as before).
+      if (t.width != kStandardTableWidth || t.depth != kStandardTableDepth ||
+          t.leg != kStandardLegSide) {
+        pt["width"] = t.width;
+        pt["depth"] = t.depth;
+        pt["leg"] = t.leg;
+      }
+      pose_tables.push_back(std::move(pt));
     }
     per_pose.push_back({{"pose", {pm.pose.x, pm.pose.y, pm.pose.theta}},
                         {"shapelets", pm.shapelets},

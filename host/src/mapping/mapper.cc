@@ -96,6 +96,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
   if (options.chain_fusion == ChainFusion::kMarginal) return marginalMap(map, options, free, rng);
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
   std::vector<Pose2> found;
+  std::vector<TableHyp> sized_found;
   for (PoseMap& chain : chains) {
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 64);
@@ -105,13 +106,18 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     map.stats.proposals += sampler.stats().proposals;
     map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, board.liveTables());
     map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, board.liveLegs());
-    sampler.mapTables(found);
-    for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
+    if (options.model.sized()) {
+      mapTablesOf(sampler, options.model, chain.tables, sized_found);
+    } else {
+      sampler.mapTables(found);
+      for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
+    }
   }
   FuseOptions agree = options.fuse;
   agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;
-  for (const MapTable& t : fuseTables(chains, agree)) poses.push_back(t.pose);
+  std::vector<MapTable> kept = fuseTables(chains, agree);  // with sizes (the rooms model)
+  for (const MapTable& t : kept) poses.push_back(t.pose);
   if (options.chain_fusion == ChainFusion::kPool) {
     // Each table any chain found starts with a leg at every corner; the coldest temperatures
     // then let the posterior keep what the evidence pays for (a rival or a table without
@@ -119,11 +125,14 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 8 * poses.size() + 64);
     holdWholeRun(board, map, free);
-    for (const Pose2& p : poses) {
-      const int32_t id = board.addTable(p);
+    for (const MapTable& k : kept) {
+      const Pose2& p = k.pose;
+      const bool sized = options.model.sized();
+      const int32_t id = sized ? board.addTable(p, k.width, k.depth, k.leg) : board.addTable(p);
       for (int c = 0; c < 4; ++c) {
-        const Vec2 at = p.toWorld(options.model.cornerOffset(c));
-        board.addLeg({at.x(), at.y(), wrapPeriod(p.theta, kPi / 2)}, id);
+        const Vec2 at = board.table(id).corner(c);
+        if (sized) board.addLeg({at.x(), at.y(), wrapPeriod(p.theta, kPi / 2)}, k.leg, id);
+        else board.addLeg({at.x(), at.y(), wrapPeriod(p.theta, kPi / 2)}, id);
       }
     }
     SamplerOptions so = globalSampler(options);
@@ -132,10 +141,21 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     sampler.anneal();
     map.stats.proposals += sampler.stats().proposals;
     sampler.mapTables(poses);
+    if (options.model.sized()) mapTablesOf(sampler, options.model, kept, sized_found);
   }
 
   // Support: per-pose MAPs that agree with each global table.
   std::vector<MapTable> out;
+  if (options.model.sized()) {
+    for (MapTable t : kept) {
+      t.support = 0;
+      for (const PoseMap& pm : map.per_pose)
+        for (const MapTable& q : pm.tables) t.support += tablesAgree(q, t, options.fuse);
+      out.push_back(t);
+    }
+    scoreBySupport(out, map.per_pose, options.fuse);
+    return out;
+  }
   for (const Pose2& p : poses) {
     MapTable t = modelTable(p, options.model);
     for (const PoseMap& pm : map.per_pose)
@@ -157,6 +177,33 @@ MapTable modelTable(const Pose2& pose, const ModelParams& model) {
   return t;
 }
 
+MapTable sizedTable(const TableHyp& h) {
+  MapTable t;
+  t.pose = h.pose;
+  t.width = h.width;
+  t.depth = h.depth;
+  t.leg = h.leg;
+  if (t.depth > t.width) {
+    std::swap(t.width, t.depth);
+    t.pose.theta += kPi / 2;
+  }
+  t.pose.theta = wrapHalfTurn(t.pose.theta);
+  return t;
+}
+
+void mapTablesOf(const Sampler& sampler, const ModelParams& model, std::vector<MapTable>& out,
+                 std::vector<TableHyp>& scratch) {
+  out.clear();
+  sampler.mapTables(scratch);
+  for (const TableHyp& h : scratch) {
+    if (model.sized()) {
+      out.push_back(sizedTable(h));
+    } else {
+      out.push_back(modelTable(h.pose, model));
+    }
+  }
+}
+
 Mapper::Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,
                const MappingOptions& options)
     : mounts_(std::move(mounts)),
@@ -165,7 +212,10 @@ Mapper::Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,
       rng_(options.seed ^ 0xB1ACB0A2Dull),
       board_(options.model, options.working_memory, 4096),
       sampler_(board_, options.sampler, rng_),
-      free_space_(lo, hi) {}
+      free_space_(lo, hi) {
+  // Tables of different sizes at one spot are different objects (a chair and a table).
+  options_.fuse.compare_sizes = options_.model.sized();
+}
 
 int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,
                     std::span<const FreeRay> free_rays) {
@@ -186,11 +236,15 @@ int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,
     sampler_.anneal();
     map_.stats.peak_live_tables = std::max(map_.stats.peak_live_tables, board_.liveTables());
     map_.stats.peak_live_legs = std::max(map_.stats.peak_live_legs, board_.liveLegs());
-    sampler_.mapTables(tables_);
     PoseMap pm;
     pm.pose = pose;
     pm.shapelets = fresh;
-    for (const Pose2& p : tables_) pm.tables.push_back(modelTable(p, options_.model));
+    if (options_.model.sized()) {
+      mapTablesOf(sampler_, options_.model, pm.tables, sized_tables_);
+    } else {
+      sampler_.mapTables(tables_);
+      for (const Pose2& p : tables_) pm.tables.push_back(modelTable(p, options_.model));
+    }
     map_.per_pose.push_back(std::move(pm));
   }
   if (options_.after_pose) options_.after_pose(t, pose, fresh > 0, board_);

@@ -1,5 +1,7 @@
 #include "crunch/mapping/report_json.h"
 
+#include <cmath>
+
 namespace crunch {
 
 nlohmann::ordered_json accuracyJson(const Evaluation& ev) {
@@ -20,6 +22,17 @@ nlohmann::ordered_json evaluationJson(const Evaluation& ev, const MatchTolerance
   accuracy["phantoms_near_walls"] = ev.phantoms_near_walls;
   accuracy["phantoms_elsewhere"] = ev.phantoms_elsewhere;
   accuracy["match_tolerance"] = {{"position_m", tol.position}, {"angle_rad", tol.angle}};
+  if (std::isfinite(tol.size)) {  // sizes judged (the rooms model); the paper's report as before
+    accuracy["match_tolerance"]["size_m"] = tol.size;
+    accuracy["size_error_m"] = {{"mean_width", ev.mean_width_error},
+                                {"max_width", ev.max_width_error},
+                                {"mean_depth", ev.mean_depth_error},
+                                {"max_depth", ev.max_depth_error},
+                                {"mean_leg", ev.mean_leg_error},
+                                {"max_leg", ev.max_leg_error}};
+    accuracy["split_objects"] = ev.split_objects;
+    accuracy["merged_objects"] = ev.merged_objects;
+  }
   return accuracy;
 }
 

@@ -8,6 +8,8 @@
 //         + (#overlapping same-type pairs) log eps_b                             (eq. 25)
 //         + (#leg pairs with the same parent at the same corner) log eps_c       (eq. 26)
 //         + sum over legs and table corners of min(passes, cap) log p_miss     (free space)
+//         + sum_T log p(size_T) + sum_L log p(side_L)   (rooms model only: the size prior,
+//           0 inside its range and -infinity outside; ModelParams::logSizePrior)
 // where logodds(P) = log P - log(1 - P) is each hypothesis' presence against its absence.
 // A move's acceptance needs only the change of J, which localEnergy() computes over the
 // hypotheses and shapelets the move touches: the Markov blankets of eq. 29.
@@ -77,9 +79,14 @@ class Blackboard {
   void shapeletsNear(const Vec2& p, IdSet<64>& out) const;
 
   // ---- Hypotheses ----
+  // Adds a table of the paper's one size (ModelParams::table_width ...).
   int32_t addTable(const Pose2& pose);
+  // Adds a table of its own size (the rooms model; any size, the prior judges it).
+  int32_t addTable(const Pose2& pose, double width, double depth, double leg);
   // Adds a leg with the standard side under `parent` (or kNone).
   int32_t addLeg(const Pose2& pose, int32_t parent);
+  // Adds a leg of side `side` under `parent` (or kNone).
+  int32_t addLeg(const Pose2& pose, double side, int32_t parent);
   // Removes a table from B; its children become orphans but stay listed in its record so
   // reviveTable() can re-link them.
   void killTable(int32_t id);
@@ -92,6 +99,9 @@ class Blackboard {
   void setParent(int32_t leg, int32_t parent);
   void moveTable(int32_t id, const Pose2& pose);
   void moveLeg(int32_t id, const Pose2& pose);
+  // Moves and resizes a table at once; children keep their parent, their corners are re-found.
+  void reshapeTable(int32_t id, const Pose2& pose, double width, double depth, double leg);
+  void setLegSide(int32_t id, double side) { legs_[id].side = side; }
 
   const TableHyp& table(int32_t id) const { return tables_[id]; }
   const LegHyp& leg(int32_t id) const { return legs_[id]; }
@@ -116,6 +126,7 @@ class Blackboard {
 
   // The footprint of a table hypothesis and of a leg (for overlap, eq. 25).
   OrientedRect tableRect(const Pose2& pose) const { return {pose, p_.table_width, p_.table_depth}; }
+  static OrientedRect tableRect(const TableHyp& t) { return {t.pose, t.width, t.depth}; }
   OrientedRect legRect(const LegHyp& l) const { return {l.pose, l.side, l.side}; }
 
   // ---- The log joint ----
@@ -131,16 +142,19 @@ class Blackboard {
 
  private:
   // The corner of a table at `table` that `leg` belongs to: the argmin of eq. 10.
-  int nearestCorner(const Pose2& table, const LegHyp& leg) const;
+  int nearestCorner(const TableHyp& table, const LegHyp& leg) const;
   void linkChild(int32_t table, int32_t leg);
   void unlinkChild(int32_t table, int32_t leg);
   double tableTerms(int32_t id, const Touched& t) const;
   double legTerms(int32_t id, const Touched& t) const;
   double shapeletTerm(int slot) const;
   // The negative-evidence term of a leg-sized square at `pose` (0 without a grid).
-  double freeTerm(const Pose2& pose) const;
+  double freeTerm(const Pose2& pose, double side) const;
   // Negative evidence at a table's four corners.
-  double tableFreeTerm(const Pose2& table) const;
+  double tableFreeTerm(const TableHyp& table) const;
+  // The size priors of the rooms model (0 under the paper's).
+  double tableSizeTerm(const TableHyp& t) const;
+  double legSideTerm(const LegHyp& l) const;
 
   ModelParams p_;
   Pool<TableHyp> tables_;

@@ -12,7 +12,10 @@ namespace crunch {
 
 // Delta_TL of eq. 10 for leg `leg` under table `table`; `corner` receives the argmin corner i.
 // The angle term compares the leg's square outline, so it is taken modulo pi/2.
+// This form is for a table of the paper's one size (ModelParams::table_width ...); the next
+// uses the table's own size, and its leg-width term compares the table's leg side with the leg's.
 double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int* corner);
+double deltaTLSized(const TableHyp& table, const LegHyp& leg, const ModelParams& p, int* corner);
 
 // Delta_LS of eq. 12: squared perimeter distance and side-angle error (modulo pi, since a
 // surface orientation is a line direction) of shapelet `s` against the leg. tau terms vanish:

@@ -16,12 +16,24 @@ inline constexpr int kMaxChildren = 8;
 
 struct TableHyp {
   Pose2 pose;
+  // Its own size (issue 13): the top's width (along the pose's x axis) and depth, and its legs'
+  // side. Under ObjectModel::kPaper always ModelParams' one size.
+  double width = 0.80;
+  double depth = 0.50;
+  double leg = 0.05;
   bool alive = false;
   uint8_t n_children = 0;
   std::array<int32_t, kMaxChildren> children{};
   std::array<uint8_t, 4> corner_count{};  // children at each corner
 
   // Missing legs m of eq. 24: corners no child occupies.
+  // Offset of corner i's leg centre in the table frame (ModelParams::cornerOffset).
+  Vec2 cornerOffset(int i) const {
+    const double hx = 0.5 * (width - leg), hy = 0.5 * (depth - leg);
+    return {(i == 0 || i == 3) ? hx : -hx, (i < 2) ? hy : -hy};
+  }
+  Vec2 corner(int i) const { return pose.toWorld(cornerOffset(i)); }
+
   int missingLegs() const {
     int m = 0;
     for (uint8_t c : corner_count) m += (c == 0);

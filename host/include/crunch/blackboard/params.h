@@ -52,6 +52,20 @@ struct ModelParams {
   double table_width = 0.80;
   double table_depth = 0.50;
   double leg_side = 0.05;
+  // The size prior of the rooms model (ObjectModel::kRooms, issue 13): a four-legged object's
+  // top is uniform over the sides in [size_min_side, size_max_long] with the shorter side at most
+  // size_max_short (chairs and stools ~0.3-0.6 m up to desks ~2.0 x 1.0 m), its leg side uniform
+  // in [leg_min, leg_max]. Uniform, not a mixture of classes: docs/BLACKBOARD.md ("Tables of any
+  // size") says why. Unused under kPaper, where every table is table_width x table_depth.
+  double size_min_side = 0.30;
+  double size_max_long = 2.00;
+  double size_max_short = 1.00;
+  double leg_min = 0.02;
+  double leg_max = 0.08;
+  // Charge a free size its Occam factor (logSizePrior). Off by default: with the paper's
+  // unnormalised constants (c_L, alpha_L) the factor, about exp(-7.5), outweighs what a fully
+  // seen four-legged table gains (about exp(+2.6); docs/BLACKBOARD.md), so no table survives.
+  bool size_occam = false;
   // Eq. 30: a parent or child farther than this many sigmas is treated as unrelated
   // (its density is below exp(-link_sigmas^2 / 1) ~ 1e-16 of the peak).
   double link_sigmas = 6.0;
@@ -67,19 +81,37 @@ struct ModelParams {
   // The ranges: priors c_*, alpha_* and delta3 positive (at most 1e6); penalties eps_* in
   // (0, 1]; spreads positive, at most 1 m or pi rad (sigma_w at most 1 m); the table 0.05..10 m
   // each way with a leg side above 0 and below half its shorter side; link_sigmas 1..20;
-  // p_miss in (0, 1]; free_pass_cap 0..1000; free_margin 0..leg_side/2. okStatus(), or an
-  // Error naming the first bad field.
+  // p_miss in (0, 1]; free_pass_cap 0..1000; free_margin 0..leg_side/2; the size prior
+  // 0.05 <= size_min_side <= size_max_short <= size_max_long <= 10 m and
+  // 0 < leg_min <= leg_max < size_min_side / 2 (four legs fit under the smallest top) (a leg
+  // thinner than 2 free_margin has its centre point as its core). okStatus(), or an Error naming the first bad field.
   Status validate() const;
 
-  // Offset of corner i's leg centre in the table frame (legs flush in the corners),
-  // corner order (+x+y, -x+y, -x-y, +x-y).
-  Vec2 cornerOffset(int i) const {
-    const double hx = 0.5 * (table_width - leg_side), hy = 0.5 * (table_depth - leg_side);
+  bool sized() const { return objects == ObjectModel::kRooms; }
+  // Offset of corner i's leg centre in the frame of a `width` x `depth` table with `leg` legs
+  // (legs flush in the corners), corner order (+x+y, -x+y, -x-y, +x-y).
+  static Vec2 cornerOffset(int i, double width, double depth, double leg) {
+    const double hx = 0.5 * (width - leg), hy = 0.5 * (depth - leg);
     return {(i == 0 || i == 3) ? hx : -hx, (i < 2) ? hy : -hy};
   }
+  // The same for the one size of the paper's model.
+  Vec2 cornerOffset(int i) const { return cornerOffset(i, table_width, table_depth, leg_side); }
+  // The largest leg side and table half-diagonal any hypothesis can have: the paper's one size,
+  // or the size prior's bounds.
+  double maxLegSide() const { return sized() ? leg_max : leg_side; }
+  double maxTableCircumradius() const {
+    return sized() ? 0.5 * std::hypot(size_max_long, size_max_short)
+                   : 0.5 * std::hypot(table_width, table_depth);
+  }
+  // log of the size prior's mass at (width, depth, leg): the uniform prior's density times the
+  // volume the evidence pins a size to (the Occam factor of a free size; params.cc), constant
+  // inside the range, -infinity outside. A table of free size must explain more than one of
+  // fixed size: with the defaults about three legs' worth of evidence (docs/BLACKBOARD.md).
+  double logSizePrior(double width, double depth, double leg) const;
+  bool legSideAllowed(double side) const { return side >= leg_min && side <= leg_max; }
   // Radius within which a shapelet can be caused by a leg (eq. 30).
   double shapeletLinkRadius() const {
-    return 0.5 * leg_side * std::sqrt(2.0) + link_sigmas * sigma_r_shapelet;
+    return 0.5 * maxLegSide() * std::sqrt(2.0) + link_sigmas * sigma_r_shapelet;
   }
   // Radius within which a leg centre can belong to a table corner (eq. 30).
   double cornerLinkRadius() const { return link_sigmas * sigma_r_leg; }

@@ -94,6 +94,10 @@ struct SamplerOptions {
   // (0.01 m)^2 * pi/32 ~ 1e-5 m^2 rad. It sets what beta = 1 means; the cold end does not
   // depend on it.
   double rj_cell = 1e-5;
+  // Size moves of the rooms model (ModelParams::objects == kRooms; unused under kPaper):
+  // Gaussian steps of a table's width and depth (one corner held fixed) and of leg sides.
+  double resize_sigma = 0.03;
+  double leg_side_sigma = 0.004;
   // Called by anneal() after each temperature (its sweeps and pruning) with the temperature's
   // place in the annealing, 0 = the hottest (beta_{schedule_steps-1}) ... schedule_steps - 1 =
   // the coldest, its beta, and the blackboard: for pictures of it part-way (paper Fig. 4).
@@ -109,8 +113,8 @@ struct SamplerOptions {
   // their product); schedule_log_top in [-50, 50] and schedule_log_step in [0, 10] (beta stays
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
   // smart_parent_gain 0..1e6; rj_moves' weights 0..1e6, not all 0; rj_box_margin (0, 1],
-  // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell (0, 1]. okStatus(), or an Error naming the
-  // first bad field.
+  // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell (0, 1]; resize_sigma and
+  // leg_side_sigma 0..1 m. okStatus(), or an Error naming the first bad field.
   Status validate() const;
 };
 
@@ -140,6 +144,8 @@ class Sampler {
 
   // MAP_t (eq. 27): the live tables after annealing.
   void mapTables(std::vector<Pose2>& out) const;
+  // The same with each table's size (the rooms model's tables differ in size).
+  void mapTables(std::vector<TableHyp>& out) const;
 
   const SamplerStats& stats() const { return stats_; }
   const std::vector<double>& schedule() const { return betas_; }
@@ -198,8 +204,9 @@ class Sampler {
   int32_t randomLiveTable();
   void primeLeg(int slot, double beta);
   // primeLeg's leg for an oriented shapelet (on its face) and for a point contact.
-  Pose2 legOnFace(const Shapelet& s);
-  Pose2 legAtPoint(const Shapelet& s);
+  // `side` is the leg's side: the paper's one, or the rooms model's draw.
+  Pose2 legOnFace(const Shapelet& s, double side);
+  Pose2 legAtPoint(const Shapelet& s, double side);
   // A table's axis (modulo pi/2) from the legs around c other than `self`, or `fallback`.
   double axisFromLegs(const Vec2& c, int32_t self, double fallback);
   // Shapelets lie near c and none is oriented (ContactReport::oriented).
@@ -208,7 +215,7 @@ class Sampler {
   bool pointNear(const Vec2& c, double radius) const;
   // Proposes a new leg at `pose` under `parent` (or kNone); the birth moves of priming and of
   // Q(ch(T)) share it.
-  void proposeLegBirth(const Pose2& pose, int32_t parent, double beta);
+  void proposeLegBirth(const Pose2& pose, double side, int32_t parent, double beta);
   void deathTable(int32_t id, double beta);
   void deathLeg(int32_t id, double beta);
   void parentChange(int32_t leg, double beta);
@@ -218,6 +225,16 @@ class Sampler {
   void jitterLeg(int32_t id, double beta);
   void proposeChild(int32_t table, double beta);
   void proposeParent(int32_t leg, double beta);
+  // The rooms model's moves (docs/BLACKBOARD.md "Tables of any size"): a table's width and
+  // depth with one corner's leg held fixed; a table's leg side; a leg's side; and a parent for a
+  // leg whose size comes from the legs and point contacts around it.
+  void resizeTable(int32_t id, double beta);
+  void tableLegSide(int32_t id, double beta);
+  void legSide(int32_t id, double beta);
+  void proposeParentSized(int32_t leg, double beta);
+  // A signed centre-to-centre span of one side of a table proposed for a leg of `leg_side`,
+  // drawn from the prior's range; `other` is the other side's span (0: unknown).
+  double priorSpan(double leg_side, double other);
   bool legDirectlyLinked(int32_t leg) const;
   // Samples a parent for a leg at `leg` among tables with a corner near it and the null prior,
   // weighted by their densities (eq. 9 vs eq. 13); `exclude` is never chosen.

@@ -11,6 +11,7 @@
 // and did. See docs/BLACKBOARD.md.
 #pragma once
 
+#include <cmath>
 #include <vector>
 
 #include "crunch/mapping/map.h"
@@ -22,9 +23,15 @@ struct FuseOptions {
   double angle = 10.0 * kPi / 180.0;  // radians, modulo pi
   int min_support = 3;                // per-pose MAPs that must agree
   double reach = 0.9;                 // metres: robot centres that could touch the table
+  // The rooms model's tables differ in size: two agree only if their widths and their depths
+  // (each written width >= depth) differ by at most `size` too, and a near-square pair (both
+  // within `size` of square) compares angles modulo pi/2. The Mapper sets compare_sizes for
+  // ObjectModel::kRooms; off, sizes are ignored (the paper's one size).
+  bool compare_sizes = false;
+  double size = 0.10;                 // metres
 
   // radius and reach above 0 and at most 10 m, angle above 0 and at most pi, min_support
-  // 1..1e6. okStatus(), or an Error naming the first bad field.
+  // 1..1e6, size above 0 and at most 10 m. okStatus(), or an Error naming the first bad field.
   Status validate() const;
 };
 
@@ -32,6 +39,12 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
 
 // True if two table poses agree within `radius` and `angle` (modulo pi).
 bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt);
+// The same for map tables: their sizes too when opt.compare_sizes.
+bool tablesAgree(const MapTable& a, const MapTable& b, const FuseOptions& opt);
+// Whether a table is square within `tolerance` (its angle then means modulo pi/2).
+inline bool nearSquare(const MapTable& t, double tolerance) {
+  return std::abs(t.width - t.depth) <= tolerance;
+}
 
 // Sets each table's score from its support: support divided by the inferring poses within
 // `reach` of it, capped at 1 (0 when none is within reach).

@@ -66,9 +66,17 @@ class Mapper {
   Map map_;
   int pose_count_ = 0;
   std::vector<Pose2> tables_;  // scratch for MAP_t
+  std::vector<TableHyp> sized_tables_;  // the same with sizes (the rooms model)
 };
 
 // A table of the model's one size at `pose`.
 MapTable modelTable(const Pose2& pose, const ModelParams& model);
+// A table hypothesis of its own size as a map table, written with width >= depth (a w x d table
+// at theta is the d x w table at theta + pi/2; theta modulo pi).
+MapTable sizedTable(const TableHyp& t);
+// The map tables of a sampler's MAP: each of its own size under the rooms model, the one size
+// of the paper's otherwise. `scratch` keeps the sampler's output (no allocation once grown).
+void mapTablesOf(const Sampler& sampler, const ModelParams& model, std::vector<MapTable>& out,
+                 std::vector<TableHyp>& scratch);
 
 }  // namespace crunch
