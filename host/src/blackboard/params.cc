@@ -34,7 +34,12 @@ Status ModelParams::validate() const {
       checkRange("link_sigmas", link_sigmas, 1.0, 20.0),
       checkAbove("p_miss", p_miss, 0.0, 1.0),
       checkCount("free_pass_cap", free_pass_cap, 0, 1000),
-      checkRange("free_margin", free_margin, 0.0, 0.5 * leg_side)};
+      checkRange("free_margin", free_margin, 0.0, 0.5 * leg_side),
+      checkAbove("c_W", c_W, 0.0, 1e6),
+      checkAbove("alpha_W", alpha_W, 0.0, 1e6),
+      checkRange("wall_cost_per_m", wall_cost_per_m, 0.0, 1e3),
+      checkRange("wall_min_length", wall_min_length, 0.001, 1.0),
+      checkAbove("wall_solid_depth", wall_solid_depth, 0.0, 1.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }

@@ -21,7 +21,14 @@ Status SamplerOptions::validate() const {
       checkRange("prime_sigma_theta", prime_sigma_theta, 0.0, kPi),
       checkRange("jitter_sigma_r", jitter_sigma_r, 0.0, 1.0),
       checkRange("jitter_sigma_theta", jitter_sigma_theta, 0.0, kPi),
-      checkRange("smart_parent_gain", smart_parent_gain, 0.0, 1e6)};
+      checkRange("smart_parent_gain", smart_parent_gain, 0.0, 1e6),
+      checkRange("wall_birth_rate", wall_birth_rate, 0.0, 1.0),
+      checkRange("wall_grow_gap", wall_grow_gap, 0.0, 10.0),
+      checkRange("wall_jitter_r", wall_jitter_r, 0.0, 10.0),
+      checkRange("wall_jitter_theta", wall_jitter_theta, 0.0, kPi),
+      checkRange("wall_end_sigma", wall_end_sigma, 0.0, 10.0),
+      checkRange("wall_split_gap", wall_split_gap, 0.0, 10.0),
+      checkRange("wall_merge_reach", wall_merge_reach, 0.0, 10.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
@@ -33,6 +40,10 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
   for (int i = opt_.schedule_steps - 1; i >= 0; --i)
     betas_.push_back(std::exp(opt_.schedule_log_top - opt_.schedule_log_step * i));
   order_.reserve(4096);
+  if (walls()) {
+    wall_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+    inliers_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+  }
 }
 
 void Sampler::anneal() {
@@ -47,14 +58,25 @@ void Sampler::anneal() {
 void Sampler::sweep(double beta) {
   for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
     if (bb_.slotUsed(slot)) primeLeg(slot, beta);
+  if (walls()) {
+    for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
+      if (bb_.slotUsed(slot)) proposeWallBirth(slot, beta);
+  }
 
   order_.clear();
   for (int32_t id = 0; id < bb_.tableExtent(); ++id)
     if (bb_.table(id).alive) order_.push_back({true, id});
   for (int32_t id = 0; id < bb_.legExtent(); ++id)
     if (bb_.leg(id).alive) order_.push_back({false, id});
+  if (walls())
+    for (int32_t id = 0; id < bb_.wallExtent(); ++id)
+      if (bb_.wall(id).alive) order_.push_back({false, id, true});
 
   for (const Ref& h : order_) {
+    if (h.is_wall) {
+      if (bb_.wall(h.id).alive) wallMove(h.id, beta);
+      continue;
+    }
     const double r = rng_.uniform();
     if (h.is_table) {
       if (!bb_.table(h.id).alive) continue;
@@ -485,6 +507,7 @@ bool Sampler::legDirectlyLinked(int32_t leg) const {
 }
 
 void Sampler::prune() {
+  if (walls()) pruneWalls();
   for (int32_t id = 0; id < bb_.tableExtent(); ++id) {
     const TableHyp& tab = bb_.table(id);
     if (!tab.alive) continue;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "crunch/mapping/wall_fusion.h"
+
 namespace crunch {
 
 namespace {
@@ -34,6 +36,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
   const int n_chains = std::max(1, options.global_chains);
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
   std::vector<Pose2> found;
+  // Walls (ObjectModel::kRooms; none otherwise): each chain's, fused across chains below.
+  std::vector<std::vector<WallHyp>> chain_walls;
   for (PoseMap& chain : chains) {
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 64);
@@ -45,7 +49,12 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, board.liveLegs());
     sampler.mapTables(found);
     for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
+    if (options.model.objects == ObjectModel::kRooms) {
+      chain_walls.emplace_back();
+      sampler.mapWalls(chain_walls.back());
+    }
   }
+  map.walls = fuseWalls(chain_walls);
   FuseOptions agree = options.fuse;
   agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;
@@ -57,6 +66,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 8 * poses.size() + 64);
     holdWholeRun(board, map, free);
+    // The fused walls compete too (none under kPaper): a table standing on one is charged.
+    for (const MapWall& w : map.walls) board.addWall(w.a, w.b);
     for (const Pose2& p : poses) {
       const int32_t id = board.addTable(p);
       for (int c = 0; c < 4; ++c) {

@@ -55,6 +55,19 @@ struct SamplerOptions {
   // Each leg near another corner of a placement adds this to its weight (base weight 1).
   double smart_parent_gain = 8.0;
   bool prune = true;
+  // Walls (ModelParams::objects == kRooms; wall_moves.cc). Each sweep, each oriented shapelet
+  // no wall explains yet seeds a data-driven wall birth with this probability: a segment fitted
+  // to the collinear shapelets around it (grown along the line while the next inlier is within
+  // wall_grow_gap).
+  double wall_birth_rate = 0.25;
+  double wall_grow_gap = 0.5;
+  // Pose moves of a wall: perpendicular shift and turn about its middle; an end moved along it;
+  // the gap a split cuts out at most; the reach within which merge finds a partner.
+  double wall_jitter_r = 0.005;
+  double wall_jitter_theta = kPi / 360;
+  double wall_end_sigma = 0.05;
+  double wall_split_gap = 0.3;
+  double wall_merge_reach = 0.5;
   // Called by anneal() after each temperature (its sweeps and pruning) with the temperature's
   // place in the annealing, 0 = the hottest (beta_{schedule_steps-1}) ... schedule_steps - 1 =
   // the coldest, its beta, and the blackboard: for pictures of it part-way (paper Fig. 4).
@@ -64,7 +77,8 @@ struct SamplerOptions {
   // The ranges: schedule_steps and sweeps_per_temperature 1..1000 (a run's time grows with
   // their product); schedule_log_top in [-50, 50] and schedule_log_step in [0, 10] (beta stays
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
-  // smart_parent_gain 0..1e6. okStatus(), or an Error naming the first bad field.
+  // smart_parent_gain 0..1e6; wall_birth_rate 0..1; wall lengths 0..10 m and angles 0..pi.
+  // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 };
 
@@ -89,6 +103,8 @@ class Sampler {
 
   // MAP_t (eq. 27): the live tables after annealing.
   void mapTables(std::vector<Pose2>& out) const;
+  // The live walls after annealing (none under ObjectModel::kPaper).
+  void mapWalls(std::vector<WallHyp>& out) const;
 
   const SamplerStats& stats() const { return stats_; }
   const std::vector<double>& schedule() const { return betas_; }
@@ -99,6 +115,7 @@ class Sampler {
   struct Ref {
     bool is_table;
     int32_t id;
+    bool is_wall = false;
   };
   void begin();
   bool decide(double delta, double beta);
@@ -129,12 +146,28 @@ class Sampler {
   // weighted by their densities (eq. 9 vs eq. 13); `exclude` is never chosen.
   int32_t sampleParent(const LegHyp& leg, int32_t exclude);
 
+  // ---- Walls (wall_moves.cc) ----
+  bool walls() const { return bb_.params().objects == ObjectModel::kRooms; }
+  // A wall explains shapelet s within three sigmas already.
+  bool wallExplains(const Shapelet& s) const;
+  void proposeWallBirth(int slot, double beta);
+  void wallMove(int32_t id, double beta);
+  void deathWall(int32_t id, double beta);
+  void jitterWall(int32_t id, double beta);
+  void extendWall(int32_t id, double beta);
+  void mergeWall(int32_t id, double beta);
+  void splitWall(int32_t id, double beta);
+  // Removes walls along which no shapelet lies (within wallLinkRadius), as prune() does legs.
+  void pruneWalls();
+
   Blackboard& bb_;
   SamplerOptions opt_;
   Rng& rng_;
   SamplerStats stats_;
   std::vector<double> betas_;
   std::vector<Ref> order_;
+  std::vector<int32_t> wall_slots_;  // shapelets along the walls a move changes
+  std::vector<int32_t> inliers_;     // a wall birth's fitted shapelets
   bool audit_ = false;
   double audit_before_ = 0.0;
 };
