@@ -19,7 +19,7 @@ constexpr double kTableCell = 1.0;
 constexpr double kLegCell = 0.2;
 constexpr double kShapeletCell = 0.2;
 // Walls are hashed at points this far apart along them.
-constexpr double kWallCell = 0.25;
+constexpr double kWallCell = kWallHashStep;
 }  // namespace
 
 Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t reserve)
@@ -285,6 +285,20 @@ void Blackboard::collectShapeletsNearSegment(const Vec2& a, const Vec2& b,
   }
 }
 
+void Blackboard::collectShapeletsNearLeg(int32_t leg, std::vector<int32_t>& out) {
+  const Vec2 c = legs_[leg].pose.position();
+  const double r = p_.shapeletLinkRadius();
+  shapelet_hash_.query(c, r, [&](int32_t slot) {
+    uint32_t& mark = slot_stamp_[static_cast<size_t>(slot)];
+    if (mark == stamp_) return;
+    const Shapelet& s = wm_[static_cast<size_t>(slot)];
+    if ((Vec2{s.x, s.y} - c).squaredNorm() > r * r) return;
+    mark = stamp_;
+    assert(out.size() < out.capacity());
+    out.push_back(slot);
+  });
+}
+
 double Blackboard::wallFreeTerm(const Vec2& a, const Vec2& b) const {
   if (!free_) return 0.0;
   // A piece of wall is crossed by a ray that passed both lines free_margin either side of it
@@ -322,22 +336,6 @@ bool Blackboard::inWallSolid(const OrientedRect& r, const WallHyp& w) const {
   const Vec2 c = 0.5 * (w.a + w.b) + (0.5 * d) * n;
   const OrientedRect band{{c.x(), c.y(), w.angle()}, len, d};
   return overlaps(r, band);
-}
-
-template <typename Hash, typename Pos, typename F>
-void Blackboard::nearWall(const Hash& hash, const WallHyp& w, double radius, Pos&& pos,
-                          F&& f) const {
-  // Each id is reported from the hash point nearest its projection on the wall only, so once.
-  const double len = w.length();
-  const int n = std::max(1, static_cast<int>(std::ceil(len / kWallCell)));
-  const Vec2 dir = len > 0 ? Vec2((w.b - w.a) / len) : Vec2{1.0, 0.0};
-  for (int k = 0; k <= n; ++k) {
-    const Vec2 q = w.a + (w.b - w.a) * (static_cast<double>(k) / n);
-    hash.query(q, 0.5 * len / n + radius, [&](int32_t id) {
-      const double t = len > 0 ? std::clamp((pos(id) - w.a).dot(dir) / len, 0.0, 1.0) : 0.0;
-      if (static_cast<int>(std::lround(t * n)) == k) f(id);
-    });
-  }
 }
 
 double Blackboard::wallTerms(int32_t id, const Touched& t) const {

@@ -139,18 +139,32 @@ void Sampler::proposeWallBirth(int slot, double beta) {
                            logGauss2(da, sr) + logGauss2(db, sr));
   (void)log_q_ratio;
 
+  // Orphan legs standing in the new wall's solid (priming puts a leg behind every contact, the
+  // wall's included) die in the same move: the wall takes over their evidence, as a new table
+  // adopts the legs at its corners (proposeParent). RJ: the reverse is the wall's death with
+  // those legs' births (their priming densities); not computed here.
+  WallHyp probe;
+  probe.a = a;
+  probe.b = b;
+  Touched t;
+  bb_.orphanLegsInSolid(probe, t.legs);
   wall_slots_.clear();
   bb_.beginCollect();
   bb_.collectShapeletsNearSegment(a, b, wall_slots_);
-  Touched t;
+  for (int32_t l : t.legs.span()) bb_.collectShapeletsNearLeg(l, wall_slots_);
   begin();
   const double e0 = bb_.localEnergy(t, wall_slots_);
+  for (int32_t l : t.legs.span()) bb_.killLeg(l);
   const int32_t id = bb_.addWall(a, b);
   t.walls.add(id);
   const double e1 = bb_.localEnergy(t, wall_slots_);
-  if (decide(e1 - e0, beta)) return;
+  if (decide(e1 - e0, beta)) {
+    for (int32_t l : t.legs.span()) bb_.releaseLeg(l);
+    return;
+  }
   bb_.killWall(id);
   bb_.releaseWall(id);
+  for (int32_t l : t.legs.span()) bb_.reviveLeg(l);
 }
 
 void Sampler::wallMove(int32_t id, double beta) {

@@ -22,6 +22,8 @@
 // Not thread-safe.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -60,6 +62,9 @@ struct Touched {
   IdSet<64> shapelets;
   IdSet<4> walls;
 };
+
+// Walls are hashed at points this far apart along them (blackboard.cc).
+inline constexpr double kWallHashStep = 0.25;
 
 class Blackboard {
  public:
@@ -120,6 +125,18 @@ class Blackboard {
   // several segments holds each slot once). `out` must have capacity for every slot.
   void beginCollect();
   void collectShapeletsNearSegment(const Vec2& a, const Vec2& b, std::vector<int32_t>& out);
+  // The same for the shapelets a leg could cause (shapeletsNear).
+  void collectShapeletsNearLeg(int32_t leg, std::vector<int32_t>& out);
+  // Adds to `out` the live legs without a parent that stand in `w`'s solid (inWallSolid), as
+  // many as it holds.
+  template <int N>
+  void orphanLegsInSolid(const WallHyp& w, IdSet<N>& out) const {
+    nearWall(leg_hash_, w, p_.leg_side + p_.wall_solid_depth,
+             [&](int32_t o) { return legs_[o].pose.position(); }, [&](int32_t o) {
+               const LegHyp& l = legs_[o];
+               if (l.alive && l.parent == kNone && inWallSolid(legRect(l), w)) out.add(o);
+             });
+  }
 
   const TableHyp& table(int32_t id) const { return tables_[id]; }
   const LegHyp& leg(int32_t id) const { return legs_[id]; }
@@ -180,9 +197,20 @@ class Blackboard {
   // surface and the footprint into the band wall_solid_depth deep behind it.
   bool inWallSolid(const OrientedRect& r, const WallHyp& w) const;
   // Calls f(id) once for each id of `hash` (positions pos(id)) within `radius` of the wall's
-  // segment (a superset: check).
+  // segment (a superset: check): each id from the hash point nearest its projection only.
   template <typename Hash, typename Pos, typename F>
-  void nearWall(const Hash& hash, const WallHyp& w, double radius, Pos&& pos, F&& f) const;
+  void nearWall(const Hash& hash, const WallHyp& w, double radius, Pos&& pos, F&& f) const {
+    const double len = w.length();
+    const int n = std::max(1, static_cast<int>(std::ceil(len / kWallHashStep)));
+    const Vec2 dir = len > 0 ? Vec2((w.b - w.a) / len) : Vec2{1.0, 0.0};
+    for (int k = 0; k <= n; ++k) {
+      const Vec2 q = w.a + (w.b - w.a) * (static_cast<double>(k) / n);
+      hash.query(q, 0.5 * len / n + radius, [&](int32_t id) {
+        const double t = len > 0 ? std::clamp((pos(id) - w.a).dot(dir) / len, 0.0, 1.0) : 0.0;
+        if (static_cast<int>(std::lround(t * n)) == k) f(id);
+      });
+    }
+  }
   // The points along a..b at which a wall is hashed.
   template <typename F>
   void wallHashPoints(const Vec2& a, const Vec2& b, F&& f) const;
