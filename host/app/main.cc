@@ -155,6 +155,8 @@ CLI::App* addSweep(CLI::App& app, SweepOptions& o) {
   sweep->add_option("--scene", o.grid.scenes,
                     "scene file, repeatable; the word 'default' is the built-in arena "
                     "(default: default)");
+  sweep->add_option("--model", o.grid.models,
+                    "object models, e.g. paper,rooms (default: paper; see --sim --model)");
   sweep->add_option("--noise", o.grid.noise, "noise regimes, e.g. ideal,realistic,noisy");
   sweep->add_option("--noise-scale", o.grid.noise_scale,
                     "noise as multiples of realistic (sigma_r 5 mm, sigma_phi pi/32), e.g. "

@@ -70,9 +70,9 @@ TEST_CASE("sweep-chart draws the Pareto and noise charts and a summary", "[sweep
     text += line + "\n";
   }
   CHECK(lines == 9);
-  CHECK(text.find("default,realistic,5,8,2,14,2,0.6000,0.1414,0.6000,0.1414,0.7000,0.0000,1.2000,"
+  CHECK(text.find("default,paper,realistic,5,8,2,14,2,0.6000,0.1414,0.6000,0.1414,0.7000,0.0000,1.2000,"
                   "300000,0,0") != std::string::npos);
-  CHECK(text.find("default,realistic,5,16,1,7,2,0.8000") != std::string::npos);
+  CHECK(text.find("default,paper,realistic,5,16,1,7,2,0.8000") != std::string::npos);
   // Noise: recall 0.8 at 5 mm, 0.2 at 25 mm (the paper's setting).
   CHECK(r.out.find("mean recall below 0.5 from sigma_r = 25 mm") != std::string::npos);
 }

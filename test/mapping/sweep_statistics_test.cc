@@ -87,7 +87,7 @@ TEST_CASE("sweepFronts: per noise regime, the wall-time and proposals fronts", "
   CHECK(fronts[1].settings == std::vector<size_t>{4, 5, 6, 7});
   CHECK(fronts[1].proposals_front == std::vector<size_t>{4, 5, 7});
   const std::string csv = sweepSummaryCsv(all, fronts);
-  CHECK(csv.find("default,realistic,5,8,2,14,2,0.6000,0.1414") != std::string::npos);
+  CHECK(csv.find("default,paper,realistic,5,8,2,14,2,0.6000,0.1414") != std::string::npos);
   CHECK(csv.find(",0,0\n") != std::string::npos);  // (8, 2, 14): on no front
 }
 
@@ -100,4 +100,37 @@ TEST_CASE("noiseLevels: the paper's setting across sigma_r, or none with one lev
   Json one = Json::array();
   one.push_back(row("realistic", 0.005, 16, 1, 7, 1, 0.8, 0.8, 1.0, 10.0));
   CHECK(noiseLevels(load(one)).empty());
+}
+
+TEST_CASE("loadSweepSummary: rows of two object models average apart; no model column is paper",
+          "[sweep_statistics]") {
+  Json rows = Json::array();
+  for (const std::string model : {"paper", "rooms"}) {
+    for (const double sigma : {0.005, 0.025}) {
+      Json r = row(sigma < 0.01 ? "realistic" : "noisy", sigma, 16, 1, 7, 1, 0.8, 0.8, 1.0, 1.0);
+      r["model"] = model;
+      if (model == "rooms") r["recall"] = 0.9;
+      rows.push_back(r);
+    }
+  }
+  const std::vector<SettingSummary> s = load(rows);
+  REQUIRE(s.size() == 4);
+  CHECK(sweepModels(s) == std::vector<std::string>{"paper", "rooms"});
+  CHECK(s[2].model == "rooms");
+  CHECK(s[2].recall_mean == Approx(0.9));
+  CHECK(settingName(s[2]) == "rooms: 16 T x 1 sweep, WM 7");
+  CHECK(noiseLevels(s, "rooms").size() == 2);
+  CHECK(noiseLevels(s, "rooms").front().model == "rooms");
+  CHECK(noiseLevels(s, "chairs").empty());
+  // Fronts are per (model, noise).
+  CHECK(sweepFronts(s).size() == 4);
+  // A model that is not a string names its row and column.
+  rows[1]["model"] = 3;
+  TempDir dir;
+  std::ofstream(dir.file("sweep.json")) << rows.dump();
+  const auto bad = loadSweepSummary(dir.file("sweep.json"));
+  REQUIRE_FALSE(bad);
+  CHECK_THAT(bad.error().message, Catch::Contains("row 1") && Catch::Contains("'model'"));
+  // Rows without the column (sweeps from before the axis) are the paper's.
+  CHECK(load(synthetic()).front().model == "paper");
 }

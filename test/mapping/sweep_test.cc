@@ -61,6 +61,28 @@ TEST_CASE("Sweep grid: points in grid order, seed fastest and scene slowest", "[
   CHECK(mo.validate().ok());
 }
 
+TEST_CASE("Sweep grid: the object model axis sits between scene and noise", "[sweep]") {
+  SweepGridSpec s = smallSpec();
+  s.models = "paper,rooms";
+  const auto g = buildSweepGrid(s);
+  REQUIRE(g);
+  CHECK(g.value().size() == 2 * 2 * 2 * 3);
+  // Model slower than noise: the first 12 points are the paper's, the next 12 the rooms model's.
+  CHECK(g.value().pointAt(11).model == ObjectModel::kPaper);
+  const SweepPoint p = g.value().pointAt(12);
+  CHECK((p.model == ObjectModel::kRooms && p.noise == 0 && p.schedule_steps == 4 && p.seed == 1));
+  CHECK(g.value().mappingOptions(p).model.objects == ObjectModel::kRooms);
+  CHECK(sweepRow(g.value(), 12, {}, {}, {}, 0.0, 0).model == "rooms");
+  // No --model: the paper's, and the fingerprint of a grid from before the axis.
+  const auto plain = buildSweepGrid(smallSpec());
+  REQUIRE(plain);
+  CHECK(plain.value().models == std::vector<ObjectModel>{ObjectModel::kPaper});
+  SweepGridSpec paper_only = smallSpec();
+  paper_only.models = "paper";
+  CHECK(buildSweepGrid(paper_only).value().fingerprint == plain.value().fingerprint);
+  CHECK(g.value().fingerprint != plain.value().fingerprint);
+}
+
 TEST_CASE("Sweep grid: noise scales are multiples of realistic, named xS", "[sweep]") {
   SweepGridSpec s;
   s.noise_scale = "0.5,2";
@@ -79,7 +101,9 @@ TEST_CASE("Sweep grid: every bad list is an Error naming its option", "[sweep]")
     std::string SweepGridSpec::*field;
     std::string value, option;
   };
-  const Case cases[] = {{&SweepGridSpec::noise, "realistic,loud", "--noise"},
+  const Case cases[] = {{&SweepGridSpec::models, "paper,chairs", "--model"},
+                        {&SweepGridSpec::models, "rooms,rooms", "--model"},
+                        {&SweepGridSpec::noise, "realistic,loud", "--noise"},
                         {&SweepGridSpec::noise, "ideal,ideal", "--noise"},
                         {&SweepGridSpec::noise_scale, "1,x", "--noise-scale"},
                         {&SweepGridSpec::noise_scale, "-1", "--noise-scale"},
@@ -145,7 +169,7 @@ TEST_CASE("Sweep rows: CSV has the JSON's values, and JSON reads back exactly", 
   CHECK(sweepRowsCsv(back.value()) == sweepRowsCsv(rows));
   const std::string csv = sweepRowsCsv(rows);
   CHECK(csv.substr(0, csv.find('\n')) ==
-        "grid,grid_index,grid_size,shard,scene,noise,sigma_r,sigma_phi,schedule_steps,sweeps,"
+        "grid,grid_index,grid_size,shard,scene,model,noise,sigma_r,sigma_phi,schedule_steps,sweeps,"
         "working_memory,seed,poses,shapelets,fused_tables,true_tables,matched,precision,recall,"
         "f1,mean_position_error_m,mean_angle_error_rad,per_pose_match_fraction,"
         "phantoms_near_walls,phantoms_elsewhere,proposals,peak_live_tables,peak_live_legs,"

@@ -44,7 +44,7 @@ TEST_CASE("sweepCharts: Pareto charts per regime with two settings, a noise char
   CHECK(pareto.series[0].x.size() == 2);  // both settings on the front
   CHECK_THAT(set.report, Catch::Contains("realistic: Pareto front (wall time):") &&
                              Catch::Contains("mean recall below 0.5 from sigma_r = 25 mm"));
-  CHECK(set.summary_csv.find("default,noisy,25,16,1,7,2,0.3000") != std::string::npos);
+  CHECK(set.summary_csv.find("default,paper,noisy,25,16,1,7,2,0.3000") != std::string::npos);
 }
 
 TEST_CASE("sweepCharts: one setting at one noise level draws nothing but still summarises",
@@ -52,5 +52,52 @@ TEST_CASE("sweepCharts: one setting at one noise level draws nothing but still s
   const SweepChartSet set = sweepCharts({setting("realistic", 0.005, 16, 0.8, 0.9)});
   CHECK(set.charts.empty());
   CHECK(set.report.empty());
-  CHECK(set.summary_csv.find("default,realistic,5,16,1,7,2,0.8000") != std::string::npos);
+  CHECK(set.summary_csv.find("default,paper,realistic,5,16,1,7,2,0.8000") != std::string::npos);
+}
+
+TEST_CASE("sweepCharts: two object models get their own fronts, a comparison and noise lines",
+          "[sweep_charts]") {
+  std::vector<SettingSummary> all;
+  for (const std::string model : {"paper", "rooms"}) {
+    const double gain = model == "paper" ? 0.0 : 0.1;
+    for (const int ss : {8, 16}) {
+      SettingSummary s = setting("realistic", 0.005, ss, 0.7 + gain + ss / 160.0, 0.05 * ss);
+      s.model = model;
+      all.push_back(s);
+    }
+    SettingSummary noisy = setting("noisy", 0.025, 16, 0.3 + gain, 0.9);
+    noisy.model = model;
+    all.push_back(noisy);
+  }
+  const SweepChartSet set = sweepCharts(all);
+  CHECK(names(set) == std::vector<std::string>{"pareto_realistic", "pareto_realistic_proposals",
+                                               "pareto_realistic_rooms",
+                                               "pareto_realistic_rooms_proposals",
+                                               "pareto_realistic_models", "pareto_noisy_models",
+                                               "noise"});
+  CHECK_THAT(set.charts[2].second.options.title, Catch::Contains("model rooms"));
+  // The comparison: per model its settings (2 points) and its front (both settings).
+  const Chart& models = set.charts[4].second;
+  REQUIRE(models.series.size() == 4);
+  CHECK(models.series[1].label.find("--model paper") == 0);
+  CHECK(models.series[3].label.find("--model rooms") == 0);
+  REQUIRE(models.series[3].y.size() == 2);
+  CHECK(models.series[3].y[0] == Approx(0.85));
+  CHECK(models.series[3].y[1] == Approx(0.9));
+  // One setting per model still compares the models (a point each).
+  REQUIRE(set.charts[5].second.series[3].y.size() == 1);
+  CHECK(set.charts[5].second.series[3].y[0] == Approx(0.4));
+  // The noise chart: two reference lines, then recall, F1, precision per model.
+  const Chart& noise = set.charts[6].second;
+  REQUIRE(noise.series.size() == 2 + 2 * 3);
+  CHECK(noise.series[5].label.find("--model rooms: recall") == 0);
+  REQUIRE(noise.series[5].y.size() == 2);
+  CHECK(noise.series[5].y[0] == Approx(0.9));
+  CHECK(noise.series[5].y[1] == Approx(0.4));
+  CHECK_THAT(set.report, Catch::Contains("rooms, realistic: Pareto front") &&
+                             Catch::Contains("noise (rooms: 16 T x 1 sweep, WM 7): recall"));
+  CHECK(set.summary_csv.find("default,rooms,noisy,25,16,1,7,2,0.4000") != std::string::npos);
+  // isPaperSetting is the paper's model at the paper's budget only.
+  CHECK(all[1].isPaperSetting());
+  CHECK_FALSE(all[4].isPaperSetting());
 }

@@ -19,14 +19,16 @@ namespace crunch {
 const std::vector<std::string> kSweepColumns = {
     "grid",           "grid_index",
     "grid_size",      "shard",
-    "scene",          "noise",
-    "sigma_r",        "sigma_phi",
-    "schedule_steps", "sweeps",
-    "working_memory", "seed",
-    "poses",          "shapelets",
-    "fused_tables",   "true_tables",
-    "matched",        "precision",
-    "recall",         "f1",
+    "scene",          "model",
+    "noise",          "sigma_r",
+    "sigma_phi",
+    "schedule_steps",
+    "sweeps",         "working_memory",
+    "seed",           "poses",
+    "shapelets",      "fused_tables",
+    "true_tables",    "matched",
+    "precision",      "recall",
+    "f1",
     "mean_position_error_m",
     "mean_angle_error_rad",
     "per_pose_match_fraction",
@@ -164,6 +166,23 @@ Status loadScenes(const SweepGridSpec& spec, SweepGrid& g, std::vector<std::stri
   return okStatus();
 }
 
+Status parseModels(const SweepGridSpec& spec, SweepGrid& g) {
+  if (spec.models.empty()) {
+    g.models = {ObjectModel::kPaper};
+    return okStatus();
+  }
+  auto names = splitList(spec.models, "--model");
+  if (!names) return names.error();
+  for (const std::string& n : names.value()) {
+    auto model = objectModelByName(n);
+    if (!model) return Error{"--" + model.error().message};
+    if (std::find(g.models.begin(), g.models.end(), model.value()) != g.models.end())
+      return Error{"--model: '" + n + "' appears twice"};
+    g.models.push_back(model.value());
+  }
+  return okStatus();
+}
+
 Status parseNoises(const SweepGridSpec& spec, SweepGrid& g) {
   if (!spec.noise.empty()) {
     auto names = splitList(spec.noise, "--noise");
@@ -223,6 +242,13 @@ std::string fingerprint(const SweepGrid& g, const std::vector<std::string>& scen
   d << "crunch.sweep/1\nsensor gaussian\n";
   for (size_t i = 0; i < g.scenes.size(); ++i)
     d << "scene " << g.scenes[i].arg << " " << hex64(fnv1a(scene_texts[i])) << "\n";
+  // The object model line only when a model other than the paper's is swept: a paper-only grid
+  // keeps the fingerprint it had before the axis existed.
+  if (g.models != std::vector<ObjectModel>{ObjectModel::kPaper}) {
+    d << "models";
+    for (const ObjectModel m : g.models) d << " " << objectModelName(m);
+    d << "\n";
+  }
   for (const NoiseRegime& n : g.noises)
     d << "noise " << n.name << " " << n.sigma_r << " " << n.sigma_phi << "\n";
   d << "schedule_steps";
@@ -249,6 +275,7 @@ Json rowJson(const SweepRow& r) {
   row["grid_size"] = r.grid_size;
   row["shard"] = r.shard;
   row["scene"] = r.scene;
+  row["model"] = r.model;
   row["noise"] = r.noise;
   row["sigma_r"] = r.sigma_r;
   row["sigma_phi"] = r.sigma_phi;
@@ -291,6 +318,7 @@ SweepRow rowFromJson(const Json& j) {
   r.grid_size = j.at("grid_size").get<std::size_t>();
   r.shard = j.at("shard").get<std::string>();
   r.scene = j.at("scene").get<std::string>();
+  r.model = j.at("model").get<std::string>();
   r.noise = j.at("noise").get<std::string>();
   r.sigma_r = number(j.at("sigma_r"));
   r.sigma_phi = number(j.at("sigma_phi"));
@@ -334,7 +362,7 @@ std::string csvField(const Json& v) {
 }  // namespace
 
 std::size_t SweepGrid::size() const {
-  return scenes.size() * noises.size() * schedule_steps.size() * sweeps.size() *
+  return scenes.size() * models.size() * noises.size() * schedule_steps.size() * sweeps.size() *
          working_memory.size() * seeds.size();
 }
 
@@ -351,6 +379,8 @@ SweepPoint SweepGrid::pointAt(std::size_t index) const {
   i /= schedule_steps.size();
   p.noise = i % noises.size();
   i /= noises.size();
+  p.model = models[i % models.size()];
+  i /= models.size();
   p.scene = i;
   return p;
 }
@@ -358,6 +388,7 @@ SweepPoint SweepGrid::pointAt(std::size_t index) const {
 MappingOptions SweepGrid::mappingOptions(const SweepPoint& p) const {
   MappingOptions mopt;
   mopt.seed = p.seed;
+  mopt.model.objects = p.model;
   mopt.sampler.schedule_steps = p.schedule_steps;
   mopt.sampler.sweeps_per_temperature = p.sweeps;
   mopt.working_memory = p.working_memory;
@@ -368,6 +399,7 @@ Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec) {
   SweepGrid g;
   std::vector<std::string> scene_texts;
   if (auto s = loadScenes(spec, g, scene_texts); !s) return s.error();
+  if (auto s = parseModels(spec, g); !s) return s.error();
   if (auto s = parseNoises(spec, g); !s) return s.error();
   const SamplerOptions sampler_defaults;
   const MappingOptions mapping_defaults;
@@ -450,6 +482,7 @@ SweepRow sweepRow(const SweepGrid& g, std::size_t index, const SweepShard& shard
   r.grid_size = g.size();
   r.shard = shard.name();
   r.scene = g.scenes[p.scene].arg;
+  r.model = objectModelName(p.model);
   r.noise = noise.name;
   r.sigma_r = noise.sigma_r;
   r.sigma_phi = noise.sigma_phi;

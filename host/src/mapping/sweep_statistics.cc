@@ -59,6 +59,8 @@ Status checkRow(const Json& row, const std::string& where) {
                    (text ? "a string" : integer ? "an integer" : "a finite number")};
     }
   }
+  if (const auto it = row.find("model"); it != row.end() && !it->is_string())
+    return Error{where + ": column 'model' must be a string"};
   return okStatus();
 }
 
@@ -79,7 +81,7 @@ SettingSummary summarise(const Acc& a) {
 }  // namespace
 
 std::string settingName(const SettingSummary& s) {
-  return std::to_string(s.schedule_steps) + " T x " + std::to_string(s.sweeps) + " sweep" +
+  return (s.model == "paper" ? std::string() : s.model + ": ") + std::to_string(s.schedule_steps) + " T x " + std::to_string(s.sweeps) + " sweep" +
          (s.sweeps == 1 ? "" : "s") + ", WM " + std::to_string(s.working_memory);
 }
 
@@ -101,6 +103,7 @@ Result<std::vector<SettingSummary>> loadSweepSummary(const std::string& path) {
     if (auto st = checkRow(row, where); !st) return st.error();
     SettingSummary key;
     key.scene = row["scene"].get<std::string>();
+    if (row.contains("model")) key.model = row["model"].get<std::string>();
     key.noise = row["noise"].get<std::string>();
     key.sigma_r = row["sigma_r"].get<double>();
     key.schedule_steps = row["schedule_steps"].get<int>();
@@ -111,7 +114,7 @@ Result<std::vector<SettingSummary>> loadSweepSummary(const std::string& path) {
                    acc.front().s.scene + "': sweep-chart draws one scene per sweep.json"};
     }
     auto it = std::find_if(acc.begin(), acc.end(), [&](const Acc& a) {
-      return a.s.noise == key.noise && a.s.schedule_steps == key.schedule_steps &&
+      return a.s.model == key.model && a.s.noise == key.noise && a.s.schedule_steps == key.schedule_steps &&
              a.s.sweeps == key.sweeps && a.s.working_memory == key.working_memory;
     });
     if (it == acc.end()) {
@@ -153,10 +156,11 @@ std::vector<size_t> paretoFront(const std::vector<double>& cost,
 std::vector<NoiseFronts> sweepFronts(const std::vector<SettingSummary>& all) {
   std::vector<NoiseFronts> out;
   for (size_t i = 0; i < all.size(); ++i) {
-    auto it = std::find_if(out.begin(), out.end(),
-                           [&](const NoiseFronts& f) { return f.noise == all[i].noise; });
+    auto it = std::find_if(out.begin(), out.end(), [&](const NoiseFronts& f) {
+      return f.model == all[i].model && f.noise == all[i].noise;
+    });
     if (it == out.end()) {
-      out.push_back({all[i].noise, {}, {}, {}});
+      out.push_back({all[i].model, all[i].noise, {}, {}, {}});
       it = out.end() - 1;
     }
     it->settings.push_back(i);
@@ -174,7 +178,19 @@ std::vector<NoiseFronts> sweepFronts(const std::vector<SettingSummary>& all) {
   return out;
 }
 
-std::vector<SettingSummary> noiseLevels(const std::vector<SettingSummary>& all) {
+std::vector<std::string> sweepModels(const std::vector<SettingSummary>& all) {
+  std::vector<std::string> models;
+  for (const SettingSummary& s : all)
+    if (std::find(models.begin(), models.end(), s.model) == models.end()) models.push_back(s.model);
+  return models;
+}
+
+std::vector<SettingSummary> noiseLevels(const std::vector<SettingSummary>& every,
+                                        const std::string& model) {
+  std::vector<SettingSummary> all;
+  for (const SettingSummary& s : every)
+    if (s.model == model) all.push_back(s);
+  if (all.empty()) return {};
   std::vector<double> sigmas;
   for (const SettingSummary& s : all) {
     if (std::find(sigmas.begin(), sigmas.end(), s.sigma_r) == sigmas.end()) {
@@ -197,7 +213,8 @@ std::vector<SettingSummary> noiseLevels(const std::vector<SettingSummary>& all) 
   };
   std::vector<SettingSummary> by_sigma;
   for (const SettingSummary& s : all) {
-    if (s.isPaperSetting()) {
+    if (s.schedule_steps == kPaperScheduleSteps && s.sweeps == kPaperSweeps &&
+        s.working_memory == kPaperWorkingMemory) {
       by_sigma = levels(s);
       break;
     }
@@ -215,12 +232,12 @@ std::string sweepSummaryCsv(const std::vector<SettingSummary>& all,
     for (const size_t i : f.proposals_front) on_props[i] = true;
   }
   std::ostringstream o;
-  o << "scene,noise,sigma_r_mm,schedule_steps,sweeps,working_memory,runs,f1_mean,f1_sd,"
+  o << "scene,model,noise,sigma_r_mm,schedule_steps,sweeps,working_memory,runs,f1_mean,f1_sd,"
        "recall_mean,recall_sd,precision_mean,precision_sd,wall_s_mean,proposals_mean,"
        "on_front_wall_s,on_front_proposals\n";
   for (size_t i = 0; i < all.size(); ++i) {
     const SettingSummary& s = all[i];
-    o << s.scene << "," << s.noise << "," << fmt("%g", s.sigma_r * 1e3) << "," << s.schedule_steps
+    o << s.scene << "," << s.model << "," << s.noise << "," << fmt("%g", s.sigma_r * 1e3) << "," << s.schedule_steps
       << "," << s.sweeps << "," << s.working_memory << "," << s.runs << ","
       << fmt("%.4f", s.f1_mean) << "," << fmt("%.4f", s.f1_sd) << ","
       << fmt("%.4f", s.recall_mean) << "," << fmt("%.4f", s.recall_sd) << ","

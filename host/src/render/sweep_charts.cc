@@ -80,7 +80,13 @@ void addSettingSeries(Chart& c, const std::vector<SettingSummary>& set, bool pro
   }
 }
 
-// The Pareto fronts (wall time) of every noise regime with two settings or more, and their charts.
+// The chart's file stem: pareto_<noise>, with _<model> for a model other than the paper's.
+std::string paretoName(const NoiseFronts& f) {
+  return "pareto_" + f.noise + (f.model == "paper" ? "" : "_" + f.model);
+}
+
+// The Pareto fronts (wall time) of every (model, noise regime) with two settings or more, and
+// their charts; with two models or more, each noise regime's fronts side by side.
 void addParetoCharts(const std::vector<SettingSummary>& all, const std::vector<NoiseFronts>& fronts,
                      SweepChartSet& out, std::ostringstream& report) {
   for (const NoiseFronts& f : fronts) {
@@ -96,15 +102,26 @@ void addParetoCharts(const std::vector<SettingSummary>& all, const std::vector<N
       return v;
     };
     const std::vector<size_t> fw = local(f.wall_front), fp = local(f.proposals_front);
-    out.charts.push_back({"pareto_" + f.noise, sweepParetoChart(set, false, f.noise, fw)});
-    out.charts.push_back(
-        {"pareto_" + f.noise + "_proposals", sweepParetoChart(set, true, f.noise, fp)});
-    report << f.noise << ": Pareto front (wall time):";
+    out.charts.push_back({paretoName(f), sweepParetoChart(set, false, f.noise, fw)});
+    out.charts.push_back({paretoName(f) + "_proposals", sweepParetoChart(set, true, f.noise, fp)});
+    report << (f.model == "paper" ? "" : f.model + ", ") << f.noise
+           << ": Pareto front (wall time):";
     for (const size_t k : fw) {
       report << " [" << settingName(set[k]) << ": F1 " << fmt("%.3f", set[k].f1_mean) << ", "
              << fmt("%.2f", set[k].wall_s_mean) << " s]";
     }
     report << "\n";
+  }
+  if (sweepModels(all).size() < 2) return;
+  std::vector<std::string> noises;
+  for (const NoiseFronts& f : fronts)
+    if (std::find(noises.begin(), noises.end(), f.noise) == noises.end()) noises.push_back(f.noise);
+  for (const std::string& noise : noises) {
+    std::vector<NoiseFronts> same;
+    for (const NoiseFronts& f : fronts)
+      if (f.noise == noise) same.push_back(f);
+    if (same.size() >= 2)
+      out.charts.push_back({"pareto_" + noise + "_models", sweepModelsChart(all, same)});
   }
 }
 
@@ -114,7 +131,9 @@ Chart sweepParetoChart(const std::vector<SettingSummary>& set, bool proposals,
                        const std::string& noise, const std::vector<size_t>& front) {
   Chart c;
   const double sigma_mm = set.front().sigma_r * 1e3;
-  c.options.title = "Accuracy against cost: noise '" + noise + "' (sigma_r " +
+  c.options.title = "Accuracy against cost" +
+                    (set.front().model == "paper" ? std::string() : ", model " + set.front().model) +
+                    ": noise '" + noise + "' (sigma_r " +
                     fmt("%g", sigma_mm) + " mm), " + set.front().scene + " scene, mean of " +
                     std::to_string(set.front().runs) + " seeds";
   c.options.x_label = proposals ? "Metropolis-Hastings proposals per run (thousands, mean)"
@@ -158,10 +177,58 @@ Chart sweepParetoChart(const std::vector<SettingSummary>& set, bool proposals,
   return c;
 }
 
-Chart sweepNoiseChart(const std::vector<SettingSummary>& by_sigma) {
+Chart sweepModelsChart(const std::vector<SettingSummary>& all,
+                       const std::vector<NoiseFronts>& fronts) {
   Chart c;
-  const SettingSummary& f = by_sigma.front();
-  c.options.title = "Accuracy against sensor noise: " + f.scene + " scene, " + settingName(f) +
+  const SettingSummary& first = all[fronts.front().settings.front()];
+  c.options.title = "Accuracy against cost by object model: noise '" + first.noise +
+                    "' (sigma_r " + fmt("%g", first.sigma_r * 1e3) + " mm), " + first.scene +
+                    " scene, mean of " + std::to_string(first.runs) + " seeds";
+  c.options.x_label = "wall time per run (s, mean)";
+  c.options.y_label = "F1 of the fused map (bars: +-1 sd over seeds)";
+  c.options.width_px = 1000;
+  c.options.height_px = 640;
+  c.options.y_min = 0.0;
+  c.options.y_max = 1.05;
+  c.options.x_min = 0.0;
+  c.options.legend = LegendPosition::kBottomRight;
+  const MarkerShape shapes[] = {MarkerShape::kCircle, MarkerShape::kSquare, MarkerShape::kDiamond,
+                                MarkerShape::kTriangle};
+  for (size_t m = 0; m < fronts.size(); ++m) {
+    const NoiseFronts& f = fronts[m];
+    ChartSeries every;  // every setting of the model, unlabelled points
+    every.style = SeriesStyle::kPoints;
+    every.colour = chartPalette(static_cast<int>(m));
+    every.marker = shapes[m % 4];
+    every.marker_size = 3.0;
+    for (const size_t i : f.settings) {
+      every.x.push_back(all[i].wall_s_mean);
+      every.y.push_back(all[i].f1_mean);
+    }
+    ChartSeries front;
+    front.label = "--model " + f.model + ": Pareto front (points: every setting)";
+    front.colour = every.colour;
+    front.marker = every.marker;
+    front.marker_size = 5.0;
+    for (const size_t i : f.wall_front) {
+      front.x.push_back(all[i].wall_s_mean);
+      front.y.push_back(all[i].f1_mean);
+      front.y_error.push_back(all[i].f1_sd);
+    }
+    c.series.push_back(every);
+    c.series.push_back(front);
+  }
+  return c;
+}
+
+Chart sweepNoiseChart(const std::vector<std::vector<SettingSummary>>& models) {
+  Chart c;
+  const SettingSummary& f = models.front().front();
+  const bool several = models.size() > 1;
+  SettingSummary setting = f;  // the sampler setting's name without the model
+  setting.model = "paper";
+  c.options.title = "Accuracy against sensor noise: " + f.scene + " scene, " +
+                    (several ? "each model at " : "") + settingName(several ? setting : f) +
                     ", mean of " + std::to_string(f.runs) + " seeds";
   c.options.x_label = "sigma_r (mm); sigma_phi grows with it (5 mm : pi/32)";
   c.options.y_label = "recall, F1, precision (bars: +-1 sd over seeds)";
@@ -171,29 +238,6 @@ Chart sweepNoiseChart(const std::vector<SettingSummary>& by_sigma) {
   c.options.y_max = kNoiseYMax;  // room above 1 for the legend
   c.options.x_min = 0.0;
   c.options.legend = LegendPosition::kTopRight;
-  ChartSeries recall, f1, precision;
-  recall.label = "recall (tables found / real tables)";
-  recall.colour = chartPalette(0);
-  recall.marker = MarkerShape::kCircle;
-  f1.label = "F1 of the fused map";
-  f1.colour = chartPalette(1);
-  f1.marker = MarkerShape::kSquare;
-  precision.label = "precision (mean)";
-  precision.colour = chartPalette(2);
-  precision.marker = MarkerShape::kDiamond;
-  precision.dashed = true;
-  precision.line_width = 1.5;
-  for (const SettingSummary& s : by_sigma) {
-    const double x = s.sigma_r * 1e3;
-    recall.x.push_back(x);
-    recall.y.push_back(s.recall_mean);
-    recall.y_error.push_back(s.recall_sd);
-    f1.x.push_back(x);
-    f1.y.push_back(s.f1_mean);
-    f1.y_error.push_back(s.f1_sd);
-    precision.x.push_back(x);
-    precision.y.push_back(s.precision_mean);
-  }
   auto vline = [](const std::string& label, double x, ChartColour col) {
     ChartSeries v;
     v.label = label;
@@ -209,9 +253,42 @@ Chart sweepNoiseChart(const std::vector<SettingSummary>& by_sigma) {
                            kGrey));
   c.series.push_back(
       vline("paper's \"very noisy\" (25 mm, pi/8)", kPaperNoisySigmaR * 1e3, kRed));
-  c.series.push_back(recall);
-  c.series.push_back(f1);
-  c.series.push_back(precision);
+  // One model: recall, F1, precision in three colours. Several: a colour per model, the metric
+  // by marker and line (recall solid circles, F1 solid squares, precision dashed diamonds).
+  for (size_t m = 0; m < models.size(); ++m) {
+    const std::string prefix = several ? "--model " + models[m].front().model + ": " : "";
+    ChartSeries recall, f1, precision;
+    recall.label = prefix + "recall (tables found / real tables)";
+    recall.marker = MarkerShape::kCircle;
+    f1.label = prefix + "F1 of the fused map";
+    f1.marker = MarkerShape::kSquare;
+    precision.label = prefix + "precision (mean)";
+    precision.marker = MarkerShape::kDiamond;
+    precision.dashed = true;
+    precision.line_width = 1.5;
+    if (several) {
+      recall.colour = f1.colour = precision.colour = chartPalette(static_cast<int>(m));
+      f1.line_width = 1.0;
+    } else {
+      recall.colour = chartPalette(0);
+      f1.colour = chartPalette(1);
+      precision.colour = chartPalette(2);
+    }
+    for (const SettingSummary& s : models[m]) {
+      const double x = s.sigma_r * 1e3;
+      recall.x.push_back(x);
+      recall.y.push_back(s.recall_mean);
+      recall.y_error.push_back(s.recall_sd);
+      f1.x.push_back(x);
+      f1.y.push_back(s.f1_mean);
+      f1.y_error.push_back(s.f1_sd);
+      precision.x.push_back(x);
+      precision.y.push_back(s.precision_mean);
+    }
+    c.series.push_back(recall);
+    c.series.push_back(f1);
+    c.series.push_back(precision);
+  }
   return c;
 }
 
@@ -220,9 +297,13 @@ SweepChartSet sweepCharts(const std::vector<SettingSummary>& all) {
   const std::vector<NoiseFronts> fronts = sweepFronts(all);
   std::ostringstream report;
   addParetoCharts(all, fronts, out, report);
-  const std::vector<SettingSummary> by_sigma = noiseLevels(all);
-  if (!by_sigma.empty()) {
-    out.charts.push_back({"noise", sweepNoiseChart(by_sigma)});
+  std::vector<std::vector<SettingSummary>> by_model;
+  for (const std::string& model : sweepModels(all)) {
+    std::vector<SettingSummary> by_sigma = noiseLevels(all, model);
+    if (!by_sigma.empty()) by_model.push_back(std::move(by_sigma));
+  }
+  if (!by_model.empty()) out.charts.push_back({"noise", sweepNoiseChart(by_model)});
+  for (const std::vector<SettingSummary>& by_sigma : by_model) {
     report << "noise (" << settingName(by_sigma.front()) << "): recall";
     for (const SettingSummary& s : by_sigma) {
       report << " " << fmt("%g", s.sigma_r * 1e3) << " mm " << fmt("%.2f", s.recall_mean);

@@ -3,10 +3,12 @@
 // point and the sweep.csv / sweep.json files, and the merge of sharded sweeps. Running the
 // points needs the simulator (crunch_sim/sweep_run.h); nothing here does.
 //
-// A sweep is the grid scenes x noise x schedule_steps x sweeps x working_memory x seeds; each grid
+// A sweep is the grid scenes x models x noise x schedule_steps x sweeps x working_memory x seeds;
+// each grid
 // point is one mapping run with the gaussian (ray-cast) sensor model — the fast one; the physics
-// sensor is not swept — at the point's noise regime, with default MappingOptions otherwise. Grid
-// order, the order of the rows: scene (slowest), noise (the named regimes, then the scales),
+// sensor is not swept — at the point's noise regime and object model (`--model`, ModelParams::
+// objects), with default MappingOptions otherwise. Grid order, the order of the rows: scene
+// (slowest), model, noise (the named regimes, then the scales),
 // schedule_steps, sweeps, working_memory, seed (fastest); a point's grid_index is its position in
 // that order.
 //
@@ -45,6 +47,7 @@ extern const std::vector<std::string> kSweepColumns;
 struct SweepGridSpec {
   // Scene files; the word "default" is the built-in arena. Empty: {"default"}.
   std::vector<std::string> scenes;
+  std::string models;          // paper,rooms (default: paper)
   std::string noise;           // ideal,realistic,noisy names (default: realistic, if no scale)
   std::string noise_scale;     // multiples of realistic's sigma_r = 5 mm and sigma_phi = pi/32
   std::string schedule_steps;  // SamplerOptions::schedule_steps values (default 16)
@@ -62,12 +65,14 @@ struct SweepScene {
 // One grid point: indices into SweepGrid::scenes / noises, and the point's values.
 struct SweepPoint {
   std::size_t scene = 0, noise = 0;
+  ObjectModel model = ObjectModel::kPaper;
   int schedule_steps = 0, sweeps = 0, working_memory = 0;
   std::uint64_t seed = 0;
 };
 
 struct SweepGrid {
   std::vector<SweepScene> scenes;
+  std::vector<ObjectModel> models;
   std::vector<NoiseRegime> noises;
   std::vector<int> schedule_steps, sweeps, working_memory;
   std::vector<std::uint64_t> seeds;
@@ -76,8 +81,8 @@ struct SweepGrid {
   std::size_t size() const;
   // Index -> point, seed fastest, scene slowest. Requires index < size().
   SweepPoint pointAt(std::size_t index) const;
-  // The point's mapping settings: defaults, with the point's seed, schedule_steps, sweeps and
-  // working_memory. Valid: buildSweepGrid validated every point. (The run raises eq. 12's
+  // The point's mapping settings: defaults, with the point's seed, object model, schedule_steps,
+  // sweeps and working_memory. Valid: buildSweepGrid validated every point. (The run raises eq. 12's
   // shapelet sigmas to the point's noise, withSensorNoise, as every simulated run does.)
   MappingOptions mappingOptions(const SweepPoint& point) const;
 };
@@ -102,7 +107,7 @@ struct SweepRow {
   std::string grid;
   std::size_t grid_index = 0, grid_size = 0;
   std::string shard;
-  std::string scene, noise;
+  std::string scene, model, noise;
   double sigma_r = 0.0, sigma_phi = 0.0;
   int schedule_steps = 0, sweeps = 0, working_memory = 0;
   std::uint64_t seed = 0;

@@ -1,5 +1,6 @@
 // Statistics of a sweep (issue 6, "Charts"; docs/RESULTS.md "Charts"): a sweep.json's rows
-// averaged over the seeds of each grid point (noise x schedule_steps x sweeps x working_memory),
+// averaged over the seeds of each grid point (model x noise x schedule_steps x sweeps x
+// working_memory),
 // the Pareto front of accuracy against cost, the noise levels of one setting, and summary.csv.
 // The charts drawn from them are render/sweep_charts.h.
 //
@@ -30,6 +31,7 @@ extern const std::vector<std::string> kSweepChartColumns;
 // One grid point's rows averaged over its seeds.
 struct SettingSummary {
   std::string scene;
+  std::string model = "paper";  // the object model (--model); sweeps from before the axis: paper
   std::string noise;     // regime name as in sweep.json ("realistic", "x2", ...)
   double sigma_r = 0.0;  // m
   int schedule_steps = 0, sweeps = 0, working_memory = 0;
@@ -40,18 +42,20 @@ struct SettingSummary {
   double wall_s_mean = 0.0;
   double proposals_mean = 0.0;
   bool isPaperSetting() const {
-    return schedule_steps == kPaperScheduleSteps && sweeps == kPaperSweeps &&
+    return model == "paper" && schedule_steps == kPaperScheduleSteps && sweeps == kPaperSweeps &&
            working_memory == kPaperWorkingMemory;
   }
 };
 
-// "16 T x 1 sweep, WM 7": the setting's name in charts and reports.
+// "16 T x 1 sweep, WM 7": the setting's name in charts and reports; a model other than the
+// paper's leads: "rooms: 16 T x 1 sweep, WM 7".
 std::string settingName(const SettingSummary& s);
 
-// Reads and checks `path` (a sweep.json) and averages its rows per (noise, schedule_steps,
-// sweeps, working_memory), in grid order (order of first appearance). Checks: the file exists and
-// parses, is a non-empty JSON array of objects, every object has the kSweepChartColumns with the
-// right types, and all rows are of one scene. Errors name the path, and the row index and column
+// Reads and checks `path` (a sweep.json) and averages its rows per (model, noise,
+// schedule_steps, sweeps, working_memory), in grid order (order of first appearance). Checks: the
+// file exists and parses, is a non-empty JSON array of objects, every object has the
+// kSweepChartColumns with the right types (and "model", if present, a string: rows without it
+// are the paper's model), and all rows are of one scene. Errors name the path, and the row index and column
 // where one is at fault.
 Result<std::vector<SettingSummary>> loadSweepSummary(const std::string& path);
 
@@ -62,23 +66,28 @@ Result<std::vector<SettingSummary>> loadSweepSummary(const std::string& path);
 std::vector<size_t> paretoFront(const std::vector<double>& cost,
                                 const std::vector<double>& accuracy);
 
-// One noise regime's settings and their Pareto fronts (F1 against wall time, against
+// One (model, noise regime)'s settings and their Pareto fronts (F1 against wall time, against
 // proposals). All indices are into the summary list the fronts were computed from.
 struct NoiseFronts {
+  std::string model;
   std::string noise;
   std::vector<size_t> settings;        // in grid order
   std::vector<size_t> wall_front;      // sorted by cost (paretoFront)
   std::vector<size_t> proposals_front;
 };
-// Per noise regime, in order of first appearance.
+// Per (model, noise regime), in order of first appearance.
 std::vector<NoiseFronts> sweepFronts(const std::vector<SettingSummary>& all);
 
-// One setting across the noise levels, by sigma_r: the paper's setting if the sweep has it at two
-// levels or more, otherwise the first setting in grid order. Empty when the sweep has fewer than
-// two distinct sigma_r (or the chosen setting fewer than two levels).
-std::vector<SettingSummary> noiseLevels(const std::vector<SettingSummary>& all);
+// One setting of `model` across the noise levels, by sigma_r: the paper's sampler setting if the
+// sweep has it at two levels or more, otherwise the model's first setting in grid order. Empty
+// when the model's rows have fewer than two distinct sigma_r (or the chosen setting fewer than
+// two levels).
+std::vector<SettingSummary> noiseLevels(const std::vector<SettingSummary>& all,
+                                        const std::string& model = "paper");
+// The models of `all`, in order of first appearance.
+std::vector<std::string> sweepModels(const std::vector<SettingSummary>& all);
 
-// summary.csv: one row per (noise, setting): the means and spreads, and whether the setting is
+// summary.csv: one row per (model, noise, setting): the means and spreads, and whether the setting is
 // on the wall-time and on the proposals Pareto front of its noise regime.
 std::string sweepSummaryCsv(const std::vector<SettingSummary>& all,
                             const std::vector<NoiseFronts>& fronts);

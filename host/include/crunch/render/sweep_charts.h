@@ -1,17 +1,19 @@
 // The charts of `crunchhost sweep-chart` (issue 6, "Charts"; docs/RESULTS.md "Charts"), drawn
 // from a sweep's statistics (mapping/sweep_statistics.h) with the chart renderer (chart.h):
 //
-//  - pareto_<noise> and pareto_<noise>_proposals, for every noise regime with at least two
-//    sampler settings: accuracy (F1 of the fused map, mean over seeds, error bars +-1 sample
+//  - pareto_<noise> and pareto_<noise>_proposals (pareto_<noise>_<model>... for an object model
+//    other than the paper's), for every (model, noise regime) with at least two sampler settings: accuracy (F1 of the fused map, mean over seeds, error bars +-1 sample
 //    standard deviation over seeds) against cost (mean wall_s per run; then mean
 //    Metropolis-Hastings proposals per run). One point per setting, colour = schedule_steps,
 //    marker = (sweeps, working_memory); the Pareto front drawn as a line through its points; the
 //    paper's setting (16 temperatures, 1 sweep per temperature, working memory 7:
 //    docs/BLACKBOARD.md "Defaults are the paper's", beta_i = exp(7.5 - 0.5 i) for i = 15 ... 0,
 //    and "the 7-slot working memory") marked as its own series.
+//  - pareto_<noise>_models, when the sweep has two object models or more: each model's settings
+//    and Pareto front (F1 against wall time), one colour per model.
 //  - noise, when the sweep has at least two noise levels (distinct sigma_r): recall, F1 (mean,
 //    +-1 sd over seeds) and precision (mean) against sigma_r in mm, at one sampler setting
-//    (noiseLevels), with the paper's "realistic" (5 mm, pi/32) and "very noisy" (25 mm, pi/8)
+//    (noiseLevels), one set of lines per object model, with the paper's "realistic" (5 mm, pi/32) and "very noisy" (25 mm, pi/8)
 //    levels marked as vertical lines.
 // Pure functions: nothing is written here.
 #pragma once
@@ -30,8 +32,14 @@ namespace crunch {
 Chart sweepParetoChart(const std::vector<SettingSummary>& set, bool proposals,
                        const std::string& noise, const std::vector<size_t>& front);
 
-// One setting across noise levels (noiseLevels; at least one entry).
-Chart sweepNoiseChart(const std::vector<SettingSummary>& by_sigma);
+// Each model's fronts of one noise regime (`fronts`: that regime's NoiseFronts, one per model;
+// their indices are into `all`).
+Chart sweepModelsChart(const std::vector<SettingSummary>& all,
+                       const std::vector<NoiseFronts>& fronts);
+
+// One setting across noise levels per object model (noiseLevels; at least one model, each
+// with at least one entry).
+Chart sweepNoiseChart(const std::vector<std::vector<SettingSummary>>& models);
 
 // Every chart of a sweep, named as the files' stems ("pareto_realistic", "noise", ...), the
 // summary.csv text and a short text report (the Pareto fronts by wall time, the recall at each
