@@ -120,7 +120,7 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
            opt.mapping.model.objects = model.value();
          },
          "objects the map may hold: paper (one table size, no walls; the paper's figures) | "
-         "rooms (walls, four-legged objects of any size)")
+         "walls (the paper's table and walls) | rooms (walls, four-legged objects of any size)")
       ->default_str("paper");
   app.add_option_function<std::string>(
          "--chain-fusion",

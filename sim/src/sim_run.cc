@@ -154,6 +154,7 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   run.map = runMapping(used, scene.poses, scene.skipped, mopt).value();  // validated above
   run.model = mopt.model;
   run.evaluation = evaluate(run.map, scene.scene, matchToleranceFor(mopt.model));
+  if (mopt.model.walled()) run.evaluation.walls = evaluateWalls(run.map, scene.scene);
   if (recorder) run.snapshot = recorder->snapshot();
   if (o.snapshot_temperature && !run.snapshot) {
     const std::string k = std::to_string(*o.snapshot_pose);

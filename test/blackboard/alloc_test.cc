@@ -1,6 +1,8 @@
 // Counts heap allocations to prove the sampler's sweep allocates nothing after warm-up
 // (ARCHITECTURE.md §3). Its own executable: it replaces the global operator new.
 #include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <new>
 
@@ -91,6 +93,66 @@ TEST_CASE("Sampler: the rooms model's size moves perform no heap allocation afte
       during += g_allocations - before;
     }
   }
+  CHECK(sampler.stats().proposals > 1000);
+  CHECK(during == 0);
+}
+
+TEST_CASE("Sampler: anneal() with walls (--model walls) performs no heap allocation after warm-up",
+          "[blackboard]") {
+  ModelParams p;
+  p.objects = ObjectModel::kWalls;
+  Blackboard bb(p, 96, 1024);
+  FreeSpaceGrid free({0, 0}, {4, 4});
+  Rng rays(2);
+  for (int i = 0; i < 300; ++i) {
+    const Vec2 a{rays.uniform(0.3, 3.7), rays.uniform(0.3, 3.7)};
+    const double h = rays.uniform(0, 2 * kPi);
+    free.addRay({a, a + 0.14 * Vec2{std::cos(h), std::sin(h)}});
+  }
+  bb.setFreeSpace(&free);
+  Rng rng(8);
+  SamplerOptions opt;
+  opt.wall_birth_rate = 0.5;
+  Sampler sampler(bb, opt, rng);
+  // Contacts along two walls (births, extends, merges, splits) and a table beside one.
+  std::vector<Shapelet> stream;
+  for (int round = 0; round < 3; ++round) {
+    for (int k = 0; k < 40; ++k) {
+      Shapelet s;
+      s.x = 0.3 + 0.04 * k + 0.001 * round;
+      s.y = 0.3 + 0.002 * ((k + round) % 3);
+      s.phi = 0.0;
+      s.ox = s.x;
+      s.oy = s.y + 0.1;
+      stream.push_back(s);
+      Shapelet v = s;
+      v.x = 0.3 + 0.002 * ((k + round) % 3);
+      v.y = 0.35 + 0.04 * k;
+      v.phi = kPi / 2;
+      v.ox = v.x + 0.1;
+      v.oy = v.y;
+      stream.push_back(v);
+    }
+    for (const auto& s : crunch::testing::TableShapelets({1.2, 1.0, 0.3}, p, {0, 1, 2, 3}))
+      stream.push_back(s);
+  }
+  const size_t warm = stream.size() / 3;
+  for (size_t i = 0; i < warm; ++i) {
+    bb.pushShapelet(stream[i]);
+    if (i % 8 == 7) sampler.anneal();
+  }
+  long long during = 0;
+  int most_walls = 0;
+  for (size_t i = warm; i < stream.size(); ++i) {
+    bb.pushShapelet(stream[i]);
+    if (i % 8 == 7) {
+      const long long before = g_allocations;
+      sampler.anneal();
+      during += g_allocations - before;
+      most_walls = std::max(most_walls, bb.liveWalls());
+    }
+  }
+  CHECK(most_walls >= 1);
   CHECK(sampler.stats().proposals > 1000);
   CHECK(during == 0);
 }

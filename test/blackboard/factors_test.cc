@@ -116,11 +116,17 @@ TEST_CASE("Factors: a face known to be longer than a leg's diagonal is no leg's 
 
 TEST_CASE("Params: the object model by name (--model, recordings)", "[blackboard]") {
   CHECK(objectModelByName("paper").value() == ObjectModel::kPaper);
+  CHECK(objectModelByName("walls").value() == ObjectModel::kWalls);
   CHECK(objectModelByName("rooms").value() == ObjectModel::kRooms);
+  CHECK(std::string(objectModelName(ObjectModel::kWalls)) == "walls");
+  CHECK(ModelParams{.objects = ObjectModel::kWalls}.walled());
+  CHECK_FALSE(ModelParams{.objects = ObjectModel::kWalls}.sized());
+  CHECK(ModelParams{.objects = ObjectModel::kRooms}.walled());
+  CHECK_FALSE(ModelParams{}.walled());
   const auto bad = objectModelByName("Rooms");
   REQUIRE_FALSE(bad);
   CHECK(bad.error().message.find("'Rooms'") != std::string::npos);
-  CHECK(bad.error().message.find("paper | rooms") != std::string::npos);
+  CHECK(bad.error().message.find("paper | walls | rooms") != std::string::npos);
   CHECK(std::string(objectModelName(ObjectModel::kRooms)) == "rooms");
   CHECK(std::string(objectModelName(ObjectModel::kPaper)) == "paper");
   CHECK(ModelParams{}.objects == ObjectModel::kPaper);

@@ -19,6 +19,8 @@ int log2Buckets(size_t expected) {
 constexpr double kTableCell = 1.0;
 constexpr double kLegCell = 0.2;
 constexpr double kShapeletCell = 0.2;
+// Walls are hashed at points this far apart along them.
+constexpr double kWallCell = kWallHashStep;
 }  // namespace
 
 Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t reserve)
@@ -30,10 +32,16 @@ Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t res
       shapelet_hash_(kShapeletCell, log2Buckets(static_cast<size_t>(working_memory))),
       wm_(static_cast<size_t>(working_memory)),
       wm_used_(static_cast<size_t>(working_memory), false),
+
       log_eps_a_(std::log(params.eps_a)),
       log_eps_b_(std::log(params.eps_b)),
       log_eps_c_(std::log(params.eps_c)),
-      table_odds_(logPresenceOdds(std::log(params.c_T), params)) {
+      table_odds_(logPresenceOdds(std::log(params.c_T), params)),
+      walls_(params.walled() ? 256 : 0),
+      wall_hash_(kWallCell, params.walled() ? 11 : 4,
+                 params.walled() ? 8 : 0),
+      slot_stamp_(static_cast<size_t>(working_memory), 0),
+      wall_odds_(logPresenceOdds(std::log(params.c_W), params)) {
   assert(working_memory > 0);
 }
 
@@ -226,7 +234,156 @@ void Blackboard::moveLeg(int32_t id, const Pose2& pose) {
   }
 }
 
+// ---------------------------------------------------------------- walls
+
+template <typename F>
+void Blackboard::wallHashPoints(const Vec2& a, const Vec2& b, F&& f) const {
+  const double len = (b - a).norm();
+  const int n = std::max(1, static_cast<int>(std::ceil(len / kWallCell)));
+  for (int k = 0; k <= n; ++k) f(Vec2(a + (b - a) * (static_cast<double>(k) / n)));
+}
+
+int32_t Blackboard::addWall(const Vec2& a, const Vec2& b) {
+  const int32_t id = walls_.acquire();
+  WallHyp& w = walls_[id];
+  w.a = a;
+  w.b = b;
+  w.alive = true;
+  wallHashPoints(a, b, [&](const Vec2& q) { wall_hash_.insert(id, q); });
+  ++live_walls_;
+  return id;
+}
+
+void Blackboard::killWall(int32_t id) {
+  WallHyp& w = walls_[id];
+  assert(w.alive);
+  w.alive = false;
+  wallHashPoints(w.a, w.b, [&](const Vec2& q) { wall_hash_.remove(id, q); });
+  --live_walls_;
+}
+
+void Blackboard::reviveWall(int32_t id) {
+  WallHyp& w = walls_[id];
+  assert(!w.alive);
+  w.alive = true;
+  wallHashPoints(w.a, w.b, [&](const Vec2& q) { wall_hash_.insert(id, q); });
+  ++live_walls_;
+}
+
+void Blackboard::moveWall(int32_t id, const Vec2& a, const Vec2& b) {
+  WallHyp& w = walls_[id];
+  assert(w.alive);
+  wallHashPoints(w.a, w.b, [&](const Vec2& q) { wall_hash_.remove(id, q); });
+  w.a = a;
+  w.b = b;
+  wallHashPoints(a, b, [&](const Vec2& q) { wall_hash_.insert(id, q); });
+}
+
+void Blackboard::beginCollect() {
+  if (++stamp_ == 0) {  // wrapped: clear the marks once
+    std::fill(slot_stamp_.begin(), slot_stamp_.end(), 0u);
+    stamp_ = 1;
+  }
+}
+
+void Blackboard::collectShapeletsNearSegment(const Vec2& a, const Vec2& b,
+                                             std::vector<int32_t>& out) {
+  const double r = p_.wallLinkRadius();
+  const double len = (b - a).norm();
+  const int n = std::max(1, static_cast<int>(std::ceil(len / kShapeletCell)));
+  const double reach = 0.5 * len / n + r;
+  for (int k = 0; k <= n; ++k) {
+    const Vec2 c = a + (b - a) * (static_cast<double>(k) / n);
+    shapelet_hash_.query(c, reach, [&](int32_t slot) {
+      uint32_t& mark = slot_stamp_[static_cast<size_t>(slot)];
+      if (mark == stamp_) return;
+      const Shapelet& s = wm_[static_cast<size_t>(slot)];
+      if (distanceToSegment({s.x, s.y}, a, b) > r) return;
+      mark = stamp_;
+      assert(out.size() < out.capacity());
+      out.push_back(slot);
+    });
+  }
+}
+
+void Blackboard::collectShapeletsNearLeg(int32_t leg, std::vector<int32_t>& out) {
+  const Vec2 c = legs_[leg].pose.position();
+  const double r = p_.shapeletLinkRadius();
+  shapelet_hash_.query(c, r, [&](int32_t slot) {
+    uint32_t& mark = slot_stamp_[static_cast<size_t>(slot)];
+    if (mark == stamp_) return;
+    const Shapelet& s = wm_[static_cast<size_t>(slot)];
+    if ((Vec2{s.x, s.y} - c).squaredNorm() > r * r) return;
+    mark = stamp_;
+    assert(out.size() < out.capacity());
+    out.push_back(slot);
+  });
+}
+
+double Blackboard::wallFreeTerm(const Vec2& a, const Vec2& b) const {
+  if (!free_) return 0.0;
+  // A piece of wall is crossed by a ray that passed both lines free_margin either side of it
+  // (a whisker whose tip stopped within the margin, or grazed the wall, does not count).
+  const double len = (b - a).norm();
+  if (len <= 0.0) return 0.0;
+  const Vec2 dir = (b - a) / len;
+  const Vec2 nrm{-dir.y(), dir.x()};
+  const double m = std::max(p_.free_margin, free_->cell());
+  const int pieces = std::max(1, static_cast<int>(std::ceil(len / p_.leg_side)));
+  const double piece = len / pieces;
+  const int steps = std::max(1, static_cast<int>(std::ceil(piece / free_->cell())));
+  double e = 0.0;
+  const double log_miss = std::log(p_.p_miss);
+  for (int i = 0; i < pieces; ++i) {
+    int best = 0;
+    for (int k = 0; k < steps; ++k) {
+      const Vec2 q = a + dir * (piece * (i + (k + 0.5) / steps));
+      best = std::max(best, std::min(free_->count(q + m * nrm), free_->count(q - m * nrm)));
+    }
+    e += std::min(best, p_.free_pass_cap) * log_miss;
+  }
+  return e;
+}
+
+bool Blackboard::inWallSolid(const OrientedRect& r, const WallHyp& w) const {
+  const double len = w.length();
+  if (len <= 0.0) return false;
+  // Behind the surface (its centre on the solid side: a thing standing against the wall's free
+  // face has its centre in front, whatever the noise of the two fits) and reaching into the
+  // band [0, wall_solid_depth] behind it (so a thing beyond a thin wall does not count).
+  const Vec2 n = w.solidNormal();
+  if ((r.pose.position() - w.a).dot(n) <= 0.0) return false;
+  const double d = p_.wall_solid_depth;
+  const Vec2 c = 0.5 * (w.a + w.b) + (0.5 * d) * n;
+  const OrientedRect band{{c.x(), c.y(), w.angle()}, len, d};
+  return overlaps(r, band);
+}
+
+double Blackboard::wallTerms(int32_t id, const Touched& t) const {
+  (void)t;
+  const WallHyp& w = walls_[id];
+  if (!w.alive) return 0.0;
+  double e = wall_odds_ - p_.wall_cost_per_m * w.length() + wallFreeTerm(w.a, w.b);
+  // Tables and legs intruding into its solid, counted here for every one; tableTerms() and
+  // legTerms() skip the walls a move touches.
+  const double band = p_.wall_solid_depth;
+  const double table_reach =
+      p_.sized() ? p_.maxTableCircumradius() : tableRect(Pose2{}).circumradius();
+  nearWall(table_hash_, w, table_reach + band,
+           [&](int32_t o) { return tables_[o].pose.position(); }, [&](int32_t o) {
+             if (tables_[o].alive && inWallSolid(tableRect(tables_[o]), w)) e += log_eps_b_;
+           });
+  nearWall(leg_hash_, w, p_.maxLegSide() + band,
+           [&](int32_t o) { return legs_[o].pose.position(); }, [&](int32_t o) {
+             if (legs_[o].alive && inWallSolid(legRect(legs_[o]), w)) e += log_eps_b_;
+           });
+  return e;
+}
+
 void Blackboard::clear() {
+  walls_.reset();
+  wall_hash_.clear();
+  live_walls_ = 0;
   tables_.reset();
   legs_.reset();
   table_hash_.clear();
@@ -276,6 +433,12 @@ double Blackboard::tableTerms(int32_t id, const Touched& t) const {
     if (o < id && t.tables.contains(o)) return;  // pair counted from o's side
     if (overlaps(rect, tableRect(tables_[o]))) e += log_eps_b_;
   });
+  if (p_.walled()) {
+    wallsNear(tab.pose.position(), rect.circumradius() + p_.wall_solid_depth, [&](int32_t w) {
+      if (!walls_[w].alive || t.walls.contains(w)) return;  // a touched wall counts the pair
+      if (inWallSolid(rect, walls_[w])) e += log_eps_b_;
+    });
+  }
   return e;
 }
 
@@ -294,6 +457,12 @@ double Blackboard::legTerms(int32_t id, const Touched& t) const {
     if (o < id && t.legs.contains(o)) return;
     if (overlaps(rect, legRect(legs_[o]))) e += log_eps_b_;
   });
+  if (p_.walled()) {
+    wallsNear(l.pose.position(), rect.circumradius() + p_.wall_solid_depth, [&](int32_t w) {
+      if (!walls_[w].alive || t.walls.contains(w)) return;  // a touched wall counts the pair
+      if (inWallSolid(rect, walls_[w])) e += log_eps_b_;
+    });
+  }
   if (has_parent) {
     const TableHyp& parent = tables_[l.parent];
     for (int i = 0; i < parent.n_children; ++i) {
@@ -316,6 +485,14 @@ double Blackboard::shapeletTerm(int slot) const {
     if (!l.alive || (l.pose.position() - Vec2{s.x, s.y}).squaredNorm() > r * r) return;
     acc = logAddExp(acc, logShapeletKernel(l, s, p_));
   });
+  if (p_.walled()) {
+    const double rw = p_.wallLinkRadius();
+    wallsNear({s.x, s.y}, rw, [&](int32_t o) {
+      const WallHyp& w = walls_[o];
+      if (!w.alive || distanceToSegment({s.x, s.y}, w.a, w.b) > rw) return;
+      acc = logAddExp(acc, logWallKernel(w, s, p_));
+    });
+  }
   return acc;
 }
 
@@ -324,6 +501,13 @@ double Blackboard::localEnergy(const Touched& t) const {
   for (int32_t id : t.tables.span()) e += tableTerms(id, t);
   for (int32_t id : t.legs.span()) e += legTerms(id, t);
   for (int32_t slot : t.shapelets.span()) e += shapeletTerm(slot);
+  for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  return e;
+}
+
+double Blackboard::localEnergy(const Touched& t, std::span<const int32_t> more_shapelets) const {
+  double e = localEnergy(t);
+  for (int32_t slot : more_shapelets) e += shapeletTerm(slot);
   return e;
 }
 
@@ -360,7 +544,21 @@ double Blackboard::totalEnergy() const {
       if (l.alive && (l.pose.position() - Vec2{wm_[s].x, wm_[s].y}).squaredNorm() <= r * r)
         acc = logAddExp(acc, logShapeletKernel(l, wm_[s], p_));
     }
+    for (int32_t i = 0; i < walls_.extent(); ++i) {
+      const WallHyp& w = walls_[i];
+      if (w.alive && distanceToSegment({wm_[s].x, wm_[s].y}, w.a, w.b) <= p_.wallLinkRadius())
+        acc = logAddExp(acc, logWallKernel(w, wm_[s], p_));
+    }
     e += acc;
+  }
+  for (int32_t i = 0; i < walls_.extent(); ++i) {
+    const WallHyp& w = walls_[i];
+    if (!w.alive) continue;
+    e += wall_odds_ - p_.wall_cost_per_m * w.length() + wallFreeTerm(w.a, w.b);
+    for (int32_t j = 0; j < tables_.extent(); ++j)
+      if (tables_[j].alive && inWallSolid(tableRect(tables_[j]), w)) e += log_eps_b_;
+    for (int32_t j = 0; j < legs_.extent(); ++j)
+      if (legs_[j].alive && inWallSolid(legRect(legs_[j]), w)) e += log_eps_b_;
   }
   return e;
 }

@@ -59,6 +59,18 @@ double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams
   return std::log(p.alpha_S) - deltaLS(leg, s, p);
 }
 
+double deltaWS(const WallHyp& wall, const Shapelet& s, const ModelParams& p) {
+  const double dr = distanceToSegment({s.x, s.y}, wall.a, wall.b) / p.sigma_r_shapelet;
+  if (!s.oriented) return dr * dr;
+  const double dth = wrapPeriod(wall.angle() - s.phi, kPi) / p.sigma_theta_shapelet;
+  return dr * dr + dth * dth;
+}
+
+double logWallKernel(const WallHyp& wall, const Shapelet& s, const ModelParams& p) {
+  if (!wallFaces(wall, s)) return -std::numeric_limits<double>::infinity();
+  return std::log(p.alpha_W) - deltaWS(wall, s, p);
+}
+
 double logShapeletDensity(std::span<const double> log_kernels, const ModelParams& p) {
   double acc = std::log(p.c_S);
   for (double k : log_kernels) acc = logAddExp(acc, k);

@@ -9,11 +9,19 @@ namespace crunch {
 
 Result<ObjectModel> objectModelByName(const std::string& name) {
   if (name == "paper") return ObjectModel::kPaper;
+  if (name == "walls") return ObjectModel::kWalls;
   if (name == "rooms") return ObjectModel::kRooms;
-  return Error{"model: unknown object model '" + name + "' (paper | rooms)"};
+  return Error{"model: unknown object model '" + name + "' (paper | walls | rooms)"};
 }
 
-const char* objectModelName(ObjectModel m) { return m == ObjectModel::kRooms ? "rooms" : "paper"; }
+const char* objectModelName(ObjectModel m) {
+  switch (m) {
+    case ObjectModel::kWalls: return "walls";
+    case ObjectModel::kRooms: return "rooms";
+    case ObjectModel::kPaper: break;
+  }
+  return "paper";
+}
 
 double ModelParams::logSizePrior(double width, double depth, double leg) const {
   const double lo = std::min(width, depth), hi = std::max(width, depth);
@@ -61,7 +69,12 @@ Status ModelParams::validate() const {
       checkRange("size_max_short", size_max_short, size_min_side, 10.0),
       checkRange("size_max_long", size_max_long, size_max_short, 10.0),
       checkAbove("leg_min", leg_min, 0.0, 0.5 * size_min_side),
-      checkRange("leg_max", leg_max, leg_min, 0.5 * size_min_side)};
+      checkRange("leg_max", leg_max, leg_min, 0.5 * size_min_side),
+      checkAbove("c_W", c_W, 0.0, 1e6),
+      checkAbove("alpha_W", alpha_W, 0.0, 1e6),
+      checkRange("wall_cost_per_m", wall_cost_per_m, 0.0, 1e3),
+      checkRange("wall_min_length", wall_min_length, 0.001, 1.0),
+      checkAbove("wall_solid_depth", wall_solid_depth, 0.0, 1.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }

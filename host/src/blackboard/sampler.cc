@@ -34,7 +34,14 @@ Status SamplerOptions::validate() const {
       checkCount("rj_steps_per_shapelet", rj_steps_per_shapelet, 1, 1000),
       checkAbove("rj_cell", rj_cell, 0.0, 1.0),
       checkRange("resize_sigma", resize_sigma, 0.0, 1.0),
-      checkRange("leg_side_sigma", leg_side_sigma, 0.0, 1.0)};
+      checkRange("leg_side_sigma", leg_side_sigma, 0.0, 1.0),
+      checkRange("wall_birth_rate", wall_birth_rate, 0.0, 1.0),
+      checkRange("wall_grow_gap", wall_grow_gap, 0.0, 10.0),
+      checkRange("wall_jitter_r", wall_jitter_r, 0.0, 10.0),
+      checkRange("wall_jitter_theta", wall_jitter_theta, 0.0, kPi),
+      checkRange("wall_end_sigma", wall_end_sigma, 0.0, 10.0),
+      checkRange("wall_split_gap", wall_split_gap, 0.0, 10.0),
+      checkRange("wall_merge_reach", wall_merge_reach, 0.0, 10.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
@@ -67,6 +74,10 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
     betas_.push_back(std::exp(opt_.schedule_log_top - opt_.schedule_log_step * i));
   order_.reserve(4096);
   rj_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+  if (walls()) {
+    wall_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+    inliers_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+  }
 }
 
 void Sampler::anneal() {
@@ -90,15 +101,26 @@ void Sampler::sweep(double beta) {
   }
   for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
     if (bb_.slotUsed(slot)) primeLeg(slot, beta);
+  if (walls()) {
+    for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
+      if (bb_.slotUsed(slot)) proposeWallBirth(slot, beta);
+  }
 
   order_.clear();
   for (int32_t id = 0; id < bb_.tableExtent(); ++id)
     if (bb_.table(id).alive) order_.push_back({true, id});
   for (int32_t id = 0; id < bb_.legExtent(); ++id)
     if (bb_.leg(id).alive) order_.push_back({false, id});
+  if (walls())
+    for (int32_t id = 0; id < bb_.wallExtent(); ++id)
+      if (bb_.wall(id).alive) order_.push_back({false, id, true});
 
   const bool sized = bb_.params().sized();
   for (const Ref& h : order_) {
+    if (h.is_wall) {
+      if (bb_.wall(h.id).alive) wallMove(h.id, beta);
+      continue;
+    }
     const double r = rng_.uniform();
     if (h.is_table) {
       if (!bb_.table(h.id).alive) continue;
@@ -561,6 +583,7 @@ bool Sampler::legDirectlyLinked(int32_t leg) const {
 }
 
 void Sampler::prune() {
+  if (walls()) pruneWalls();
   for (int32_t id = 0; id < bb_.tableExtent(); ++id) {
     const TableHyp& tab = bb_.table(id);
     if (!tab.alive) continue;

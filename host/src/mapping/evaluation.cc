@@ -155,4 +155,87 @@ Evaluation evaluate(const Map& map, const Scene& scene, const MatchTolerance& to
   return ev;
 }
 
+namespace {
+constexpr double kWallContact = 0.02;
+constexpr double kWallCoverDistance = 0.05;
+constexpr double kWallCoverAngle = 10.0 * kPi / 180.0;
+constexpr double kWallSample = 0.01;
+
+double segAngle(const Vec2& a, const Vec2& b) { return std::atan2(b.y() - a.y(), b.x() - a.x()); }
+
+// Calls f(point) at the centres of the ~1 cm pieces of a..b; returns the piece length.
+template <typename F>
+double forSamples(const Vec2& a, const Vec2& b, F&& f) {
+  const double len = (b - a).norm();
+  const int n = std::max(1, static_cast<int>(std::ceil(len / kWallSample)));
+  for (int k = 0; k < n; ++k) f(Vec2(a + (b - a) * ((k + 0.5) / n)));
+  return len / n;
+}
+
+bool nearSegment(const Vec2& p, double angle, const Vec2& a, const Vec2& b) {
+  return distanceToSegment(p, a, b) <= kWallCoverDistance &&
+         std::abs(wrapPeriod(segAngle(a, b) - angle, kPi)) <= kWallCoverAngle;
+}
+}  // namespace
+
+WallEvaluation evaluateWalls(const Map& map, const Scene& scene) {
+  WallEvaluation ev;
+  ev.evaluated = true;
+  ev.mapped_walls = static_cast<int>(map.walls.size());
+  const std::vector<WallSpec> all = scene.allWalls();
+  // allWalls(): the boundary's four and then the interior ones (scene.h); identify the interior
+  // ones by value so the order does not matter.
+  const auto interior = [&](const WallSpec& w) {
+    return std::any_of(scene.walls.begin(), scene.walls.end(), [&](const WallSpec& x) {
+      return (x.a - w.a).norm() < 1e-12 && (x.b - w.b).norm() < 1e-12;
+    });
+  };
+  double b_touched = 0, b_covered = 0, i_touched = 0, i_touched_cov = 0, i_len = 0, i_cov = 0;
+  for (const WallSpec& w : all) {
+    const bool inner = interior(w);
+    std::vector<Vec2> contacts;
+    for (const Shapelet& s : map.shapelets)
+      if (distanceToSegment({s.x, s.y}, w.a, w.b) <= kWallContact) contacts.push_back({s.x, s.y});
+    const double ang = segAngle(w.a, w.b);
+    const double piece = forSamples(w.a, w.b, [](const Vec2&) {});
+    forSamples(w.a, w.b, [&](const Vec2& p) {
+      const bool touched = std::any_of(contacts.begin(), contacts.end(), [&](const Vec2& c) {
+        return (c - p).norm() <= kWallContact;
+      });
+      const bool covered = std::any_of(map.walls.begin(), map.walls.end(), [&](const MapWall& m) {
+        return nearSegment(p, ang, m.a, m.b);
+      });
+      if (inner) {
+        i_len += piece;
+        i_cov += covered ? piece : 0.0;
+        if (touched) {
+          i_touched += piece;
+          i_touched_cov += covered ? piece : 0.0;
+        }
+      } else if (touched) {
+        b_touched += piece;
+        b_covered += covered ? piece : 0.0;
+      }
+    });
+  }
+  for (const MapWall& m : map.walls) {
+    ev.mapped_length += (m.b - m.a).norm();
+    const double ang = segAngle(m.a, m.b);
+    const double piece = forSamples(m.a, m.b, [](const Vec2&) {});
+    forSamples(m.a, m.b, [&](const Vec2& p) {
+      const bool real = std::any_of(all.begin(), all.end(), [&](const WallSpec& w) {
+        return nearSegment(p, ang, w.a, w.b);
+      });
+      if (!real) ev.false_length += piece;
+    });
+  }
+  ev.boundary_touched = b_touched;
+  ev.boundary_coverage = b_touched > 0 ? b_covered / b_touched : 1.0;
+  ev.interior_length = i_len;
+  ev.interior_found = i_len > 0 ? i_cov / i_len : 1.0;
+  ev.interior_touched = i_touched;
+  ev.interior_touched_coverage = i_touched > 0 ? i_touched_cov / i_touched : 1.0;
+  return ev;
+}
+
 }  // namespace crunch

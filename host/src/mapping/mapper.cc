@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "crunch/mapping/posterior_marginals.h"
+#include "crunch/mapping/wall_fusion.h"
 
 namespace crunch {
 
@@ -97,6 +98,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
   std::vector<Pose2> found;
   std::vector<TableHyp> sized_found;
+  // Walls (ModelParams::walled(); none otherwise): each chain's, fused across chains below.
+  std::vector<std::vector<WallHyp>> chain_walls;
   for (PoseMap& chain : chains) {
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 64);
@@ -112,7 +115,12 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
       sampler.mapTables(found);
       for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
     }
+    if (options.model.walled()) {
+      chain_walls.emplace_back();
+      sampler.mapWalls(chain_walls.back());
+    }
   }
+  map.walls = fuseWalls(chain_walls);
   FuseOptions agree = options.fuse;
   agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;
@@ -125,6 +133,8 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
                      4 * map.shapelets.size() + 8 * poses.size() + 64);
     holdWholeRun(board, map, free);
+    // The fused walls compete too (none under kPaper): a table standing on one is charged.
+    for (const MapWall& w : map.walls) board.addWall(w.a, w.b);
     for (const MapTable& k : kept) {
       const Pose2& p = k.pose;
       const bool sized = options.model.sized();

@@ -21,6 +21,19 @@ nlohmann::ordered_json evaluationJson(const Evaluation& ev, const MatchTolerance
   accuracy["per_pose_match_fraction"] = ev.per_pose_match_fraction;
   accuracy["phantoms_near_walls"] = ev.phantoms_near_walls;
   accuracy["phantoms_elsewhere"] = ev.phantoms_elsewhere;
+  if (ev.walls.evaluated) {
+    const WallEvaluation& w = ev.walls;
+    accuracy["walls"] = {{"mapped_walls", w.mapped_walls},
+                         {"mapped_length_m", w.mapped_length},
+                         {"boundary_touched_m", w.boundary_touched},
+                         {"boundary_coverage", w.boundary_coverage},
+                         {"interior_length_m", w.interior_length},
+                         {"interior_found", w.interior_found},
+                         {"interior_touched_m", w.interior_touched},
+                         {"interior_touched_coverage", w.interior_touched_coverage},
+                         {"false_length_m", w.false_length},
+                         {"wall_phantoms", ev.phantoms_near_walls}};
+  }
   accuracy["match_tolerance"] = {{"position_m", tol.position}, {"angle_rad", tol.angle}};
   if (std::isfinite(tol.size)) {  // sizes judged (the rooms model); the paper's report as before
     accuracy["match_tolerance"]["size_m"] = tol.size;

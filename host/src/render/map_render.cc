@@ -95,6 +95,7 @@ constexpr double kPerPoseAlpha = 0.22;  // about five agreeing poses reach near-
 constexpr Rgb kShapeletLine{1.0, 0.62, 0.0};
 constexpr Rgb kShapeletDot{0.80, 0.38, 0.0};
 constexpr Rgb kFused{0.05, 0.30, 0.85};
+constexpr Rgb kFusedWall{0.0, 0.70, 0.35};  // green: apart from the true walls' black
 constexpr Rgb kText{0.10, 0.10, 0.10};
 
 constexpr double kShapeletLength = 0.04;  // metres, drawn along phi
@@ -269,6 +270,22 @@ void drawWalls(const Painter& p, const Scene& truth) {
   cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_BUTT);
 }
 
+// The fused map's walls (--model walls or rooms): drawn over the true walls in green, thinner, so
+// a true wall shows black at both sides of a found one and alone where none was found; a false
+// wall shows green alone.
+void drawFusedWalls(const Painter& p, const Map& map) {
+  if (map.walls.empty()) return;
+  p.colour(kFusedWall);
+  cairo_set_line_width(p.cr(), kFusedWidth);
+  cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_ROUND);
+  for (const MapWall& w : map.walls) {
+    p.moveTo(w.a);
+    p.lineTo(w.b);
+    cairo_stroke(p.cr());
+  }
+  cairo_set_line_cap(p.cr(), CAIRO_LINE_CAP_BUTT);
+}
+
 // Each position drawn once however many headings it was visited with.
 std::vector<Vec2> uniquePositions(const std::vector<Pose2>& poses) {
   std::set<std::pair<long long, long long>> seen;  // millimetre cells
@@ -379,7 +396,7 @@ void drawTitle(const Painter& p, const std::string& line) {
 }
 
 // Legend in the top-right corner, in the margin beside the arena so it hides no data.
-void drawLegend(const Painter& p, const RenderOptions& options) {
+void drawLegend(const Painter& p, const RenderOptions& options, bool fused_walls) {
   cairo_t* cr = p.cr();
   const double x0 = MapCanvas::kMarginLeft + p.canvas().arenaWidthPx() + 18.0;
   const double row = 24.0;
@@ -452,6 +469,14 @@ void drawLegend(const Painter& p, const RenderOptions& options) {
     tableIcon(1.5);
     cairo_stroke(cr);
     label("fused map");
+    if (fused_walls) {
+      cairo_set_line_width(cr, kFusedWidth);
+      p.colour(kFusedWall);
+      cairo_move_to(cr, x0, y + 0.5 * icon_h);
+      cairo_line_to(cr, x0 + icon_w, y + 0.5 * icon_h);
+      cairo_stroke(cr);
+      label("fused walls");
+    }
   }
 }
 
@@ -471,9 +496,12 @@ void drawPicture(cairo_t* cr, const MapCanvas& canvas, const Map& map, const Sce
   // Shapelets last: they are the evidence, small, and would vanish under the fused legs.
   if (options.draw_shapelets) drawShapelets(p, map);
   p.restore();
+  // Walls over the shapelets (a wall is a line; its shapelets show at its sides), unclipped:
+  // the boundary lies on the clip.
+  if (options.draw_fused) drawFusedWalls(p, map);
   drawAxes(p);
   drawTitle(p, titleLine(map, truth, options));
-  drawLegend(p, options);
+  drawLegend(p, options, !map.walls.empty());
 }
 
 // ---- Blackboard snapshot layers (Figs. 3-4) ------------------------------------------------------

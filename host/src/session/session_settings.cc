@@ -106,7 +106,7 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   if (m.contains("model")) {
     const std::string path = member(mp, "model");
     const Json& v = m["model"];
-    if (!v.is_string()) fail(path, "expected \"paper\" or \"rooms\"");
+    if (!v.is_string()) fail(path, "expected \"paper\", \"walls\" or \"rooms\"");
     const auto model = objectModelByName(v.get<std::string>());
     if (!model) fail(path, model.error().message);
     s.mapping.model.objects = model.value();

@@ -10,6 +10,10 @@
 //         + sum over legs and table corners of min(passes, cap) log p_miss     (free space)
 //         + sum_T log p(size_T) + sum_L log p(side_L)   (rooms model only: the size prior,
 //           0 inside its range and -infinity outside; ModelParams::logSizePrior)
+// and, with walls (--model walls or rooms, docs/BLACKBOARD.md "Walls"),
+//         + sum_W [ logodds(delta^3 c_W) - wall_cost_per_m |W| + free(W) ]
+//         + (#table-wall and leg-wall pairs intruding into the wall's solid) log eps_b
+// with each wall's kernel alpha_W exp(-Delta_WS) joining the shapelets' noisy-OR sums.
 // where logodds(P) = log P - log(1 - P) is each hypothesis' presence against its absence.
 // A move's acceptance needs only the change of J, which localEnergy() computes over the
 // hypotheses and shapelets the move touches: the Markov blankets of eq. 29.
@@ -20,6 +24,8 @@
 // Not thread-safe.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -51,12 +57,16 @@ struct IdSet {
   std::span<const int32_t> span() const { return {ids, static_cast<size_t>(n)}; }
 };
 
-// What a move touches: tables, legs, and working-memory slots of shapelets.
+// What a move touches: tables, legs, walls, and working-memory slots of shapelets.
 struct Touched {
   IdSet<8> tables;
   IdSet<4 * kMaxChildren> legs;
   IdSet<64> shapelets;
+  IdSet<4> walls;
 };
+
+// Walls are hashed at points this far apart along them (blackboard.cc).
+inline constexpr double kWallHashStep = 0.25;
 
 class Blackboard {
  public:
@@ -103,6 +113,41 @@ class Blackboard {
   void reshapeTable(int32_t id, const Pose2& pose, double width, double depth, double leg);
   void setLegSide(int32_t id, double side) { legs_[id].side = side; }
 
+  // ---- Walls (ModelParams::walled(): --model walls or rooms; none under kPaper) ----
+  int32_t addWall(const Vec2& a, const Vec2& b);
+  void killWall(int32_t id);
+  void reviveWall(int32_t id);
+  void releaseWall(int32_t id) { walls_.release(id); }
+  void moveWall(int32_t id, const Vec2& a, const Vec2& b);
+  const WallHyp& wall(int32_t id) const { return walls_[id]; }
+  int32_t wallExtent() const { return walls_.extent(); }
+  int liveWalls() const { return live_walls_; }
+  // Calls f(id) once for every wall (alive or not) that may lie within `radius` of c (a
+  // superset: check). Walls are hashed at points along their length.
+  template <typename F>
+  void wallsNear(const Vec2& c, double radius, F&& f) const {
+    IdSet<64> seen;
+    wall_hash_.query(c, radius + 0.5 * wall_hash_.cell(), [&](int32_t id) { seen.add(id); });
+    for (int32_t id : seen.span()) f(id);
+  }
+  // Appends to `out` the working-memory slots of shapelets within wallLinkRadius() of the
+  // segment a..b that are not yet in it since the last beginCollect() (so the union over
+  // several segments holds each slot once). `out` must have capacity for every slot.
+  void beginCollect();
+  void collectShapeletsNearSegment(const Vec2& a, const Vec2& b, std::vector<int32_t>& out);
+  // The same for the shapelets a leg could cause (shapeletsNear).
+  void collectShapeletsNearLeg(int32_t leg, std::vector<int32_t>& out);
+  // Adds to `out` the live legs without a parent that stand in `w`'s solid (inWallSolid), as
+  // many as it holds.
+  template <int N>
+  void orphanLegsInSolid(const WallHyp& w, IdSet<N>& out) const {
+    nearWall(leg_hash_, w, p_.leg_side + p_.wall_solid_depth,
+             [&](int32_t o) { return legs_[o].pose.position(); }, [&](int32_t o) {
+               const LegHyp& l = legs_[o];
+               if (l.alive && l.parent == kNone && inWallSolid(legRect(l), w)) out.add(o);
+             });
+  }
+
   const TableHyp& table(int32_t id) const { return tables_[id]; }
   const LegHyp& leg(int32_t id) const { return legs_[id]; }
   int32_t tableExtent() const { return tables_.extent(); }
@@ -134,6 +179,9 @@ class Blackboard {
   // Touched hypotheses that are dead contribute nothing, so before/after a move differ by the
   // move's change of J when `t` covers everything whose terms it changes.
   double localEnergy(const Touched& t) const;
+  // The same plus the shapelet terms of `more_shapelets` (slots not in t.shapelets): a wall's
+  // move changes the terms of every shapelet along it, more than Touched holds.
+  double localEnergy(const Touched& t, std::span<const int32_t> more_shapelets) const;
   // J over the whole blackboard by brute force (tests only: quadratic).
   double totalEnergy() const;
 
@@ -155,6 +203,31 @@ class Blackboard {
   // The size priors of the rooms model (0 under the paper's).
   double tableSizeTerm(const TableHyp& t) const;
   double legSideTerm(const LegHyp& l) const;
+  double wallTerms(int32_t id, const Touched& t) const;
+  // A wall's negative evidence: the wall cut into pieces one leg side long, each charged as a
+  // leg core is (blackboard.cc).
+  double wallFreeTerm(const Vec2& a, const Vec2& b) const;
+  // A footprint (a leg's, a table top's) intrudes into the wall's solid: its centre behind the
+  // surface and the footprint into the band wall_solid_depth deep behind it.
+  bool inWallSolid(const OrientedRect& r, const WallHyp& w) const;
+  // Calls f(id) once for each id of `hash` (positions pos(id)) within `radius` of the wall's
+  // segment (a superset: check): each id from the hash point nearest its projection only.
+  template <typename Hash, typename Pos, typename F>
+  void nearWall(const Hash& hash, const WallHyp& w, double radius, Pos&& pos, F&& f) const {
+    const double len = w.length();
+    const int n = std::max(1, static_cast<int>(std::ceil(len / kWallHashStep)));
+    const Vec2 dir = len > 0 ? Vec2((w.b - w.a) / len) : Vec2{1.0, 0.0};
+    for (int k = 0; k <= n; ++k) {
+      const Vec2 q = w.a + (w.b - w.a) * (static_cast<double>(k) / n);
+      hash.query(q, 0.5 * len / n + radius, [&](int32_t id) {
+        const double t = len > 0 ? std::clamp((pos(id) - w.a).dot(dir) / len, 0.0, 1.0) : 0.0;
+        if (static_cast<int>(std::lround(t * n)) == k) f(id);
+      });
+    }
+  }
+  // The points along a..b at which a wall is hashed.
+  template <typename F>
+  void wallHashPoints(const Vec2& a, const Vec2& b, F&& f) const;
 
   ModelParams p_;
   Pool<TableHyp> tables_;
@@ -170,6 +243,12 @@ class Blackboard {
   int live_legs_ = 0;
   double log_eps_a_, log_eps_b_, log_eps_c_, table_odds_;
   const FreeSpaceGrid* free_ = nullptr;
+  Pool<WallHyp> walls_;
+  SpatialHash wall_hash_;
+  std::vector<uint32_t> slot_stamp_;  // collectShapeletsNearSegment's marks
+  uint32_t stamp_ = 0;
+  int live_walls_ = 0;
+  double wall_odds_ = 0.0;
 };
 
 }  // namespace crunch

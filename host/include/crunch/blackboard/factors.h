@@ -36,6 +36,21 @@ inline bool legCanCause(double side, const Shapelet& s) {
 // log of the kernel alpha_S exp(-Delta_LS) of eq. 11; -infinity where !legCanCause.
 double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams& p);
 
+// Delta_WS of a wall (objects == kRooms): (distance from s to the segment / sigma_r_shapelet)^2
+// plus, for an oriented shapelet, (angle between phi and the segment, modulo pi,
+// / sigma_theta_shapelet)^2: eq. 12's style with the segment for the leg's perimeter.
+double deltaWS(const WallHyp& wall, const Shapelet& s, const ModelParams& p);
+
+// Whether a wall's surface faces the whisker that sensed s: its base (ox, oy) lies on the wall's
+// free side (the left of a->b). A face cannot be touched from inside the solid behind it.
+inline bool wallFaces(const WallHyp& wall, const Shapelet& s) {
+  return wall.solidNormal().dot(Vec2{s.ox - wall.a.x(), s.oy - wall.a.y()}) < 0.0;
+}
+
+// log of the wall's kernel alpha_W exp(-Delta_WS); -infinity where !wallFaces. A wall can cause
+// any contact on it whatever its face_span (a wall is the long face legCanCause() refuses legs).
+double logWallKernel(const WallHyp& wall, const Shapelet& s, const ModelParams& p);
+
 // log p(S | pa(S)) by the continuous noisy-OR of eq. 17: log(c_S + sum_j kernel_j), from the
 // kernels' logs.
 double logShapeletDensity(std::span<const double> log_kernels, const ModelParams& p);

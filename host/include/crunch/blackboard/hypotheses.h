@@ -1,8 +1,10 @@
-// Hypothesis records of the blackboard: tables and legs (paper eqs. 7-8). Shapelets are the
+// Hypothesis records of the blackboard: tables and legs (paper eqs. 7-8), and walls (issue 13,
+// --model rooms). Shapelets are the
 // observations (robot/shapelet.h). Plain data, owned by the Blackboard's pools.
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include "crunch/core/geometry.h"
@@ -47,6 +49,24 @@ struct LegHyp {
   int32_t parent = kNone;  // the table that caused it (eq. 8), or none (null prior, eq. 13)
   int8_t corner = -1;      // the parent's corner nearest this leg (the argmin of eq. 10)
   bool alive = false;
+};
+
+// A wall (--model walls or rooms only): the finite segment a..b of a flat surface, which causes the
+// shapelets lying on it with their orientation along it (blackboard.h). A surface faces one way:
+// its free side (where whiskers can be) is the left of a->b, the solid behind it the right; the
+// two faces of a thin wall are two hypotheses. No parent: walls have only the null prior c_W and
+// a cost per metre of length (params.h).
+struct WallHyp {
+  Vec2 a{0.0, 0.0}, b{0.0, 0.0};
+  bool alive = false;
+
+  double length() const { return (b - a).norm(); }
+  double angle() const { return std::atan2(b.y() - a.y(), b.x() - a.x()); }
+  // Unit normal into the solid (the right of a->b); zero for a degenerate wall.
+  Vec2 solidNormal() const {
+    const double len = length();
+    return len > 0 ? Vec2{(b.y() - a.y()) / len, -(b.x() - a.x()) / len} : Vec2{0.0, 0.0};
+  }
 };
 
 }  // namespace crunch

@@ -15,11 +15,14 @@ enum class ObjectModel {
   // The paper's: one table size (table_width x table_depth, leg_side legs), no walls, the
   // paper's acceptance. Keeps the paper's figures reproducible.
   kPaper,
-  // Walls as line segments, four-legged objects of any size within the prior's range.
+  // The paper's one table size, and walls as line segments (docs/BLACKBOARD.md "Walls").
+  kWalls,
+  // Walls, and four-legged objects of any size within the prior's range (chairs to desks;
+  // docs/BLACKBOARD.md "Tables of any size").
   kRooms,
 };
 
-// "paper" | "rooms"; an Error naming the choices otherwise.
+// "paper" | "walls" | "rooms"; an Error naming the choices otherwise.
 Result<ObjectModel> objectModelByName(const std::string& name);
 const char* objectModelName(ObjectModel m);
 
@@ -78,16 +81,39 @@ struct ModelParams {
   int free_pass_cap = 2;
   double free_margin = 0.015;
 
+  // Walls (walled(): objects kWalls or kRooms; docs/BLACKBOARD.md "Walls"). A wall W has the null prior
+  // c_W (its presence odds as a table's: eq. 28 with c_W) and costs wall_cost_per_m per metre
+  // of its length in the log joint, so a wall must be paid for by the shapelets it explains:
+  // "model no more than a scene needs". It causes a shapelet with the kernel
+  // alpha_W exp(-Delta_WS), Delta_WS = (d / sigma_r_shapelet)^2 + (angle / sigma_theta_shapelet)^2,
+  // d the shapelet's distance to the segment and angle between phi and the segment modulo pi
+  // (eq. 12's style; a point shapelet has the distance term only), and cannot cause one sensed
+  // from behind it (its whisker base on the solid side). A wall's solid: the band
+  // wall_solid_depth deep behind its surface (the least thickness of a wall, less than the
+  // simulator's 2 cm). A leg or a table top whose centre is behind the surface and whose
+  // footprint reaches into the band is charged log eps_b (eq. 25's style: two things cannot
+  // share space).
+  double c_W = 0.4;
+  double alpha_W = 1.0;
+  double wall_cost_per_m = 2.0;
+  double wall_solid_depth = 0.015;
+  // Shortest wall a move may make.
+  double wall_min_length = 0.05;
+
   // The ranges: priors c_*, alpha_* and delta3 positive (at most 1e6); penalties eps_* in
   // (0, 1]; spreads positive, at most 1 m or pi rad (sigma_w at most 1 m); the table 0.05..10 m
   // each way with a leg side above 0 and below half its shorter side; link_sigmas 1..20;
   // p_miss in (0, 1]; free_pass_cap 0..1000; free_margin 0..leg_side/2; the size prior
   // 0.05 <= size_min_side <= size_max_short <= size_max_long <= 10 m and
   // 0 < leg_min <= leg_max < size_min_side / 2 (four legs fit under the smallest top) (a leg
-  // thinner than 2 free_margin has its centre point as its core). okStatus(), or an Error naming the first bad field.
+  // thinner than 2 free_margin has its centre point as its core); c_W, alpha_W as the other
+  // priors; wall_cost_per_m 0..1e3; wall_min_length 0.001..1 m; wall_solid_depth in (0, 1] m.
+  // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 
   bool sized() const { return objects == ObjectModel::kRooms; }
+  // Walls are hypotheses (kWalls, kRooms).
+  bool walled() const { return objects != ObjectModel::kPaper; }
   // Offset of corner i's leg centre in the frame of a `width` x `depth` table with `leg` legs
   // (legs flush in the corners), corner order (+x+y, -x+y, -x-y, +x-y).
   static Vec2 cornerOffset(int i, double width, double depth, double leg) {
@@ -113,6 +139,8 @@ struct ModelParams {
   double shapeletLinkRadius() const {
     return 0.5 * maxLegSide() * std::sqrt(2.0) + link_sigmas * sigma_r_shapelet;
   }
+  // Distance from a segment within which a shapelet can be caused by a wall (eq. 30).
+  double wallLinkRadius() const { return link_sigmas * sigma_r_shapelet; }
   // Radius within which a leg centre can belong to a table corner (eq. 30).
   double cornerLinkRadius() const { return link_sigmas * sigma_r_leg; }
 };

@@ -98,6 +98,19 @@ struct SamplerOptions {
   // Gaussian steps of a table's width and depth (one corner held fixed) and of leg sides.
   double resize_sigma = 0.03;
   double leg_side_sigma = 0.004;
+  // Walls (ModelParams::walled(); wall_moves.cc). Each sweep, each oriented shapelet
+  // no wall explains yet seeds a data-driven wall birth with this probability: a segment fitted
+  // to the collinear shapelets around it (grown along the line while the next inlier is within
+  // wall_grow_gap).
+  double wall_birth_rate = 0.25;
+  double wall_grow_gap = 0.5;
+  // Pose moves of a wall: perpendicular shift and turn about its middle; an end moved along it;
+  // the gap a split cuts out at most; the reach within which merge finds a partner.
+  double wall_jitter_r = 0.005;
+  double wall_jitter_theta = kPi / 360;
+  double wall_end_sigma = 0.05;
+  double wall_split_gap = 0.3;
+  double wall_merge_reach = 0.5;
   // Called by anneal() after each temperature (its sweeps and pruning) with the temperature's
   // place in the annealing, 0 = the hottest (beta_{schedule_steps-1}) ... schedule_steps - 1 =
   // the coldest, its beta, and the blackboard: for pictures of it part-way (paper Fig. 4).
@@ -114,7 +127,8 @@ struct SamplerOptions {
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
   // smart_parent_gain 0..1e6; rj_moves' weights 0..1e6, not all 0; rj_box_margin (0, 1],
   // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell (0, 1]; resize_sigma and
-  // leg_side_sigma 0..1 m. okStatus(), or an Error naming the first bad field.
+  // leg_side_sigma 0..1 m; wall_birth_rate 0..1; wall lengths 0..10 m and angles 0..pi.
+  // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 };
 
@@ -146,6 +160,8 @@ class Sampler {
   void mapTables(std::vector<Pose2>& out) const;
   // The same with each table's size (the rooms model's tables differ in size).
   void mapTables(std::vector<TableHyp>& out) const;
+  // The live walls after annealing (none under ObjectModel::kPaper).
+  void mapWalls(std::vector<WallHyp>& out) const;
 
   const SamplerStats& stats() const { return stats_; }
   const std::vector<double>& schedule() const { return betas_; }
@@ -156,6 +172,7 @@ class Sampler {
   struct Ref {
     bool is_table;
     int32_t id;
+    bool is_wall = false;
   };
   void begin();
   bool decide(double delta, double beta);
@@ -240,6 +257,20 @@ class Sampler {
   // weighted by their densities (eq. 9 vs eq. 13); `exclude` is never chosen.
   int32_t sampleParent(const LegHyp& leg, int32_t exclude);
 
+  // ---- Walls (wall_moves.cc) ----
+  bool walls() const { return bb_.params().walled(); }
+  // A wall explains shapelet s within three sigmas already.
+  bool wallExplains(const Shapelet& s) const;
+  void proposeWallBirth(int slot, double beta);
+  void wallMove(int32_t id, double beta);
+  void deathWall(int32_t id, double beta);
+  void jitterWall(int32_t id, double beta);
+  void extendWall(int32_t id, double beta);
+  void mergeWall(int32_t id, double beta);
+  void splitWall(int32_t id, double beta);
+  // Removes walls along which no shapelet lies (within wallLinkRadius), as prune() does legs.
+  void pruneWalls();
+
   Blackboard& bb_;
   SamplerOptions opt_;
   Rng& rng_;
@@ -247,6 +278,8 @@ class Sampler {
   std::vector<double> betas_;
   std::vector<Ref> order_;
   std::vector<int> rj_slots_;  // working-memory slots with a birth box (sweepReversible)
+  std::vector<int32_t> wall_slots_;  // shapelets along the walls a move changes
+  std::vector<int32_t> inliers_;     // a wall birth's fitted shapelets
   bool audit_ = false;
   double audit_before_ = 0.0;
 };

@@ -27,6 +27,23 @@ MatchTolerance matchToleranceFor(const ModelParams& model);
 // True if a mapped table matches a real one within the tolerance (angle modulo pi).
 bool tableMatches(const MapTable& mapped, const TableSpec& truth, const MatchTolerance& tol);
 
+// The map's walls against the scene's (--model walls or rooms; evaluateWalls). Lengths in metres,
+// measured on 1 cm samples of the segments. A true wall's sample is touched when a wall contact
+// (a shapelet within kWallContact = 2 cm of that true wall) lies within kWallContact of it; a
+// sample is covered when a mapped wall passes within 5 cm of it at an angle within 10 degrees.
+struct WallEvaluation {
+  bool evaluated = false;           // evaluateWalls() ran (the model has walls)
+  int mapped_walls = 0;
+  double mapped_length = 0.0;
+  double boundary_touched = 0.0;    // length of the arena's boundary walls touched
+  double boundary_coverage = 0.0;   // covered fraction of it (1 when nothing was touched)
+  double interior_length = 0.0;     // the interior walls' whole length
+  double interior_found = 0.0;      // covered fraction of it (1 when there are none)
+  double interior_touched = 0.0;
+  double interior_touched_coverage = 0.0;  // covered fraction of the touched interior length
+  double false_length = 0.0;        // mapped length within 5 cm / 10 degrees of no true wall
+};
+
 struct Evaluation {
   int true_tables = 0;
   int fused_tables = 0;
@@ -49,8 +66,12 @@ struct Evaluation {
   // top holds the centres of two or more real ones.
   int split_objects = 0;
   int merged_objects = 0;
+  WallEvaluation walls;  // filled by evaluateWalls() under --model rooms
 };
 
 Evaluation evaluate(const Map& map, const Scene& scene, const MatchTolerance& tol = {});
+
+// The walls' scores above, from the map's walls and shapelets.
+WallEvaluation evaluateWalls(const Map& map, const Scene& scene);
 
 }  // namespace crunch

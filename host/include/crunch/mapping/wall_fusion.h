@@ -1,0 +1,26 @@
+// Walls across the global inference's chains (issue 13, --model walls or rooms): each chain ends
+// with its own walls; a fused wall is a group of walls along one line (directions within
+// `angle`, every end within `offset` of the group's line) that overlap or nearly meet along it
+// (gap at most `gap`). Its score is the fraction of chains with a wall in the group; groups with
+// score >= min_score are kept, spanning the median of the chains' ends along the group's line.
+#pragma once
+
+#include <vector>
+
+#include "crunch/blackboard/hypotheses.h"
+#include "crunch/mapping/map.h"
+
+namespace crunch {
+
+struct WallFuseOptions {
+  double angle = 10.0 * kPi / 180.0;  // radians, modulo pi
+  double offset = 0.05;               // metres across the line
+  double gap = 0.10;                  // metres along it
+  double min_score = 0.5;
+};
+
+// chains[i]: the walls chain i ended with.
+std::vector<MapWall> fuseWalls(const std::vector<std::vector<WallHyp>>& chains,
+                               const WallFuseOptions& opt = {});
+
+}  // namespace crunch

@@ -1,0 +1,375 @@
+// The sampler's wall moves (ModelParams::walled(); docs/BLACKBOARD.md "Walls"):
+// a data-driven birth that fits a segment to the collinear shapelets around a seed shapelet
+// (grown along the line, refitted by total least squares as it grows: a RANSAC-style fit used as
+// a Metropolis-Hastings proposal, paper §4), death, a pose jitter, moving one end, merging two
+// collinear walls and splitting one with a gap cut out. Each move computes the change of the
+// log joint over the walls it changes and every shapelet along their old and new segments
+// (Blackboard::collectShapeletsNearSegment), so the audit (Sampler::setAudit) checks it.
+//
+// Proposal ratios: each move writes its log q(reverse) - log q(forward) into `log_q_ratio`
+// where it is computed. Sampler::decide does not take it yet (the reversible-jump acceptance
+// is the MCMC engineer's, issue 13): search for "RJ:" to wire it in.
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "crunch/blackboard/sampler.h"
+
+namespace crunch {
+
+namespace {
+constexpr double kLog2Pi = 1.8378770664093453;
+
+// Line-direction difference modulo pi, in [0, pi/2].
+double lineAngleDiff(double a, double b) { return std::abs(wrapPeriod(a - b, kPi)); }
+
+// log density of an isotropic 2-D Gaussian step d with spread sigma.
+double logGauss2(const Vec2& d, double sigma) {
+  return -kLog2Pi - 2.0 * std::log(sigma) - 0.5 * d.squaredNorm() / (sigma * sigma);
+}
+
+// Running sums for a total-least-squares line fit.
+struct LineFit {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
+  void add(const Vec2& p) {
+    n += 1;
+    sx += p.x();
+    sy += p.y();
+    sxx += p.x() * p.x();
+    sxy += p.x() * p.y();
+    syy += p.y() * p.y();
+  }
+  Vec2 centroid() const { return {sx / n, sy / n}; }
+  // Principal direction's angle (modulo pi).
+  double angle() const {
+    const double cxx = sxx / n - (sx / n) * (sx / n), cyy = syy / n - (sy / n) * (sy / n);
+    const double cxy = sxy / n - (sx / n) * (sy / n);
+    return 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+  }
+};
+}  // namespace
+
+bool Sampler::wallExplains(const Shapelet& s) const {
+  const ModelParams& p = bb_.params();
+  bool yes = false;
+  bb_.wallsNear({s.x, s.y}, p.wallLinkRadius(), [&](int32_t o) {
+    const WallHyp& w = bb_.wall(o);
+    if (w.alive && deltaWS(w, s, p) < 9.0) yes = true;
+  });
+  return yes;
+}
+
+void Sampler::proposeWallBirth(int slot, double beta) {
+  const ModelParams& p = bb_.params();
+  const Shapelet& seed = bb_.shapelet(slot);
+  if (!seed.oriented || rng_.uniform() >= opt_.wall_birth_rate) return;
+  if (wallExplains(seed)) return;
+  // Inliers: oriented shapelets within three sigmas of the line in distance and angle.
+  const double tol_r = 3.0 * p.sigma_r_shapelet, tol_th = 3.0 * p.sigma_theta_shapelet;
+  const double leg_diag = p.leg_side * std::sqrt(2.0);
+  const double gap = opt_.wall_grow_gap;
+  LineFit fit;
+  Vec2 c{seed.x, seed.y};
+  double th = seed.phi;
+  Vec2 dir{std::cos(th), std::sin(th)};
+  Vec2 lo = c, hi = c;  // the inliers furthest back and forward along dir
+  const Vec2 nrm0{-dir.y(), dir.x()};
+  const double seed_side = (Vec2{seed.ox, seed.oy} - c).dot(nrm0);
+  if (seed_side == 0.0) return;
+  double max_span = 0.0;
+  inliers_.clear();
+  // Window [t_from, t_to] along the current line; the first is around the seed.
+  const auto take = [&](double t_from, double t_to) {
+    int added = 0;
+    const Vec2 mid = c + dir * (0.5 * (t_from + t_to));
+    bb_.shapeletsWithin(mid, 0.5 * (t_to - t_from) + tol_r, [&](int32_t o) {
+      const Shapelet& so = bb_.shapelet(o);
+      if (!so.oriented || lineAngleDiff(so.phi, th) > tol_th) return;
+      // Sensed from the seed's side of the line: the same face.
+      const double side = (Vec2{so.ox, so.oy} - c).dot(nrm0);
+      if (side * seed_side <= 0.0) return;
+      const Vec2 q = Vec2{so.x, so.y} - c;
+      const double t = q.dot(dir), perp = std::abs(q.x() * dir.y() - q.y() * dir.x());
+      if (t < t_from || t > t_to || perp > tol_r) return;
+      if (inliers_.size() < inliers_.capacity()) inliers_.push_back(o);
+      fit.add({so.x, so.y});
+      max_span = std::max(max_span, so.face_span);
+      if (t < (lo - c).dot(dir)) lo = {so.x, so.y};
+      if (t > (hi - c).dot(dir)) hi = {so.x, so.y};
+      ++added;
+    });
+    return added;
+  };
+  const auto refit = [&]() {
+    if (fit.n < 2) return;
+    const Vec2 cen = fit.centroid();
+    if ((hi - lo).norm() >= leg_diag) {
+      double a = fit.angle();
+      if (std::cos(a - th) < 0) a += kPi;  // keep the direction's sense
+      th = a;
+      dir = {std::cos(th), std::sin(th)};
+    }
+    c = cen;
+  };
+  take(-gap, gap);
+  refit();
+  for (int guard = 0; guard < 1000; ++guard) {
+    const double t1 = (hi - c).dot(dir), t0 = (lo - c).dot(dir);
+    const int fwd = take(t1 + 1e-9, t1 + gap);
+    const int back = take(t0 - gap, t0 - 1e-9);
+    if (fwd + back == 0) break;
+    refit();
+  }
+  const double t0 = (lo - c).dot(dir), t1 = (hi - c).dot(dir);
+  // Evidence no longer than a leg's face is a leg's to explain (legCanCause's converse), unless
+  // a contact on it is known to lie on a longer face.
+  if (fit.n < 3 || (t1 - t0 < std::max(leg_diag, p.wall_min_length) && max_span <= leg_diag))
+    return;
+  if (t1 - t0 < p.wall_min_length) return;
+  const double sr = opt_.prime_sigma_r;
+  const Vec2 da{rng_.normal(0, sr), rng_.normal(0, sr)}, db{rng_.normal(0, sr), rng_.normal(0, sr)};
+  Vec2 a = c + dir * t0 + da, b = c + dir * t1 + db;
+  // The free side is the left of a->b (hypotheses.h): where the seed's whisker was.
+  if ((b - a).x() * (seed.oy - a.y()) - (b - a).y() * (seed.ox - a.x()) < 0.0) std::swap(a, b);
+  // RJ: forward: seed chosen (rate / shapelets, and about any of the fit's inliers regrows the
+  // same line) times the Gaussian ends; reverse: this wall's death when visited (r1 of
+  // wallMove). No Jacobian: the ends are drawn directly.
+  const double log_q_ratio =
+      std::log(opt_.r1) - (std::log(opt_.wall_birth_rate * fit.n / bb_.shapeletCount()) +
+                           logGauss2(da, sr) + logGauss2(db, sr));
+  (void)log_q_ratio;
+
+  // Orphan legs standing in the new wall's solid (priming puts a leg behind every contact, the
+  // wall's included) die in the same move: the wall takes over their evidence, as a new table
+  // adopts the legs at its corners (proposeParent). RJ: the reverse is the wall's death with
+  // those legs' births (their priming densities); not computed here.
+  WallHyp probe;
+  probe.a = a;
+  probe.b = b;
+  Touched t;
+  bb_.orphanLegsInSolid(probe, t.legs);
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+  for (int32_t l : t.legs.span()) bb_.collectShapeletsNearLeg(l, wall_slots_);
+  begin();
+  const double e0 = bb_.localEnergy(t, wall_slots_);
+  for (int32_t l : t.legs.span()) bb_.killLeg(l);
+  const int32_t id = bb_.addWall(a, b);
+  t.walls.add(id);
+  const double e1 = bb_.localEnergy(t, wall_slots_);
+  if (decide(e1 - e0, beta)) {
+    for (int32_t l : t.legs.span()) bb_.releaseLeg(l);
+    return;
+  }
+  bb_.killWall(id);
+  bb_.releaseWall(id);
+  for (int32_t l : t.legs.span()) bb_.reviveLeg(l);
+}
+
+void Sampler::wallMove(int32_t id, double beta) {
+  const double r = rng_.uniform();
+  if (r < opt_.r1) deathWall(id, beta);
+  else if (r < 0.4) jitterWall(id, beta);
+  else if (r < 0.7) extendWall(id, beta);
+  else if (r < 0.85) mergeWall(id, beta);
+  else splitWall(id, beta);
+}
+
+void Sampler::deathWall(int32_t id, double beta) {
+  // RJ: log_q_ratio is minus the birth's (the birth's fit rerun from this wall's inliers); not
+  // computed here: the birth's proposal is data-driven and its regrowth costs a fit.
+  const WallHyp w = bb_.wall(id);
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  begin();
+  const double e0 = bb_.localEnergy(t, wall_slots_);
+  bb_.killWall(id);
+  const double e1 = bb_.localEnergy(t, wall_slots_);
+  if (decide(e1 - e0, beta)) {
+    bb_.releaseWall(id);
+    return;
+  }
+  bb_.reviveWall(id);
+}
+
+void Sampler::jitterWall(int32_t id, double beta) {
+  // Symmetric (a Gaussian turn about the middle and a Gaussian shift across): RJ: log_q_ratio = 0.
+  const WallHyp w = bb_.wall(id);
+  const Vec2 mid = 0.5 * (w.a + w.b), half = 0.5 * (w.b - w.a);
+  const double dth = rng_.normal(0, opt_.wall_jitter_theta);
+  const Vec2 h{half.x() * std::cos(dth) - half.y() * std::sin(dth),
+               half.x() * std::sin(dth) + half.y() * std::cos(dth)};
+  const double len = w.length();
+  const Vec2 nrm = len > 0 ? Vec2{-h.y() / (0.5 * len), h.x() / (0.5 * len)} : Vec2{0, 0};
+  const Vec2 m2 = mid + rng_.normal(0, opt_.wall_jitter_r) * nrm;
+  const Vec2 a = m2 - h, b = m2 + h;
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  begin();
+  const double e0 = bb_.localEnergy(t, wall_slots_);
+  bb_.moveWall(id, a, b);
+  const double e1 = bb_.localEnergy(t, wall_slots_);
+  if (!decide(e1 - e0, beta)) bb_.moveWall(id, w.a, w.b);
+}
+
+void Sampler::extendWall(int32_t id, double beta) {
+  // One end (either, equally likely) moved along the wall by a Gaussian step: symmetric, so
+  // RJ: log_q_ratio = 0 (a step that would leave the wall shorter than wall_min_length is not
+  // proposed; its reverse is not either).
+  const WallHyp w = bb_.wall(id);
+  const double len = w.length();
+  if (len <= 0) return;
+  const Vec2 dir = (w.b - w.a) / len;
+  const double step = rng_.normal(0, opt_.wall_end_sigma);
+  const bool move_b = rng_.uniform() < 0.5;
+  if (len + step < bb_.params().wall_min_length) return;
+  const Vec2 a = move_b ? w.a : Vec2(w.a - step * dir);
+  const Vec2 b = move_b ? Vec2(w.b + step * dir) : w.b;
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  begin();
+  const double e0 = bb_.localEnergy(t, wall_slots_);
+  bb_.moveWall(id, a, b);
+  const double e1 = bb_.localEnergy(t, wall_slots_);
+  if (!decide(e1 - e0, beta)) bb_.moveWall(id, w.a, w.b);
+}
+
+void Sampler::mergeWall(int32_t id, double beta) {
+  const ModelParams& p = bb_.params();
+  const WallHyp w = bb_.wall(id);
+  const double len = w.length();
+  if (len <= 0) return;
+  const Vec2 dir = (w.b - w.a) / len;
+  const double tol_r = 3.0 * p.sigma_r_shapelet, tol_th = 3.0 * p.sigma_theta_shapelet;
+  // A partner: another wall along the same line (both its ends within tol_r of w's line, its
+  // direction within tol_th) with an end within wall_merge_reach of one of w's.
+  int32_t partner = kNone;
+  int seen = 0;
+  const auto consider = [&](int32_t o) {
+    const WallHyp& ow = bb_.wall(o);
+    if (o == id || !ow.alive || lineAngleDiff(ow.angle(), w.angle()) > tol_th) return;
+    if ((ow.b - ow.a).dot(dir) <= 0.0) return;  // the other face (free sides opposite)
+    const auto perp = [&](const Vec2& q) {
+      const Vec2 d = q - w.a;
+      return std::abs(d.x() * dir.y() - d.y() * dir.x());
+    };
+    if (perp(ow.a) > tol_r || perp(ow.b) > tol_r) return;
+    const double reach = opt_.wall_merge_reach;
+    const double near = std::min({(ow.a - w.a).norm(), (ow.a - w.b).norm(), (ow.b - w.a).norm(),
+                                  (ow.b - w.b).norm()});
+    if (near > reach && distanceToSegment(ow.a, w.a, w.b) > 0 &&
+        distanceToSegment(w.a, ow.a, ow.b) > 0)
+      return;
+    if (rng_.uniform() * ++seen < 1.0) partner = o;
+  };
+  IdSet<64> cand;
+  bb_.wallsNear(w.a, opt_.wall_merge_reach, [&](int32_t o) { cand.add(o); });
+  bb_.wallsNear(w.b, opt_.wall_merge_reach, [&](int32_t o) { cand.add(o); });
+  for (int32_t o : cand.span()) consider(o);
+  if (partner == kNone) return;
+  const WallHyp ow = bb_.wall(partner);
+  // The merged wall: the length-weighted line of the two, spanning all four ends.
+  const double l2 = ow.length();
+  const Vec2 d2 = l2 > 0 ? Vec2((ow.b - ow.a) / l2) : dir;
+  Vec2 md = len * dir + l2 * d2;
+  md /= md.norm();
+  const Vec2 cen = (len * 0.5 * (w.a + w.b) + l2 * 0.5 * (ow.a + ow.b)) / (len + l2);
+  double t0 = 0, t1 = 0;
+  bool first = true;
+  for (const Vec2& q : {w.a, w.b, ow.a, ow.b}) {
+    const double tq = (q - cen).dot(md);
+    t0 = first ? tq : std::min(t0, tq);
+    t1 = first ? tq : std::max(t1, tq);
+    first = false;
+  }
+  const Vec2 a = cen + t0 * md, b = cen + t1 * md;
+  // RJ: the reverse is a split of the merged wall that recreates both (a cut at the gap with
+  // the gap's width, and re-fitted lines): not computable from split's draws (split keeps the
+  // line); left for the reversible-jump option to pair.
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  bb_.collectShapeletsNearSegment(ow.a, ow.b, wall_slots_);
+  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  t.walls.add(partner);
+  begin();
+  const double e0 = bb_.localEnergy(t, wall_slots_);
+  bb_.killWall(partner);
+  bb_.moveWall(id, a, b);
+  const double e1 = bb_.localEnergy(t, wall_slots_);
+  if (decide(e1 - e0, beta)) {
+    bb_.releaseWall(partner);
+    return;
+  }
+  bb_.moveWall(id, w.a, w.b);
+  bb_.reviveWall(partner);
+}
+
+void Sampler::splitWall(int32_t id, double beta) {
+  const ModelParams& p = bb_.params();
+  const WallHyp w = bb_.wall(id);
+  const double len = w.length(), mn = p.wall_min_length;
+  if (len < 2.0 * mn) return;
+  const Vec2 dir = (w.b - w.a) / len;
+  // A cut at u, uniform where both pieces keep the shortest length, and a gap uniform in
+  // [0, min(wall_split_gap, what the second piece can spare)].
+  const double u = rng_.uniform(mn, len - mn);
+  const double g = rng_.uniform(0.0, std::min(opt_.wall_split_gap, len - mn - u));
+  // RJ: forward density 1/(len - 2 mn) * 1/gmax; the reverse is a merge choosing this pair
+  // (1/#partners within reach) that refits the line (deterministic): the ratio needs the merge
+  // to reproduce the original exactly, which it does only for collinear pieces (as here).
+  const double gmax = std::min(opt_.wall_split_gap, len - mn - u);
+  const double log_q_ratio = std::log(len - 2.0 * mn) + (gmax > 0 ? std::log(gmax) : 0.0);
+  (void)log_q_ratio;
+  const Vec2 a1 = w.a, b1 = w.a + u * dir, a2 = w.a + (u + g) * dir, b2 = w.b;
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  begin();
+  const double e0 = bb_.localEnergy(t, wall_slots_);
+  bb_.moveWall(id, a1, b1);
+  const int32_t nid = bb_.addWall(a2, b2);
+  t.walls.add(nid);
+  const double e1 = bb_.localEnergy(t, wall_slots_);
+  if (decide(e1 - e0, beta)) return;
+  bb_.killWall(nid);
+  bb_.releaseWall(nid);
+  bb_.moveWall(id, w.a, w.b);
+}
+
+void Sampler::pruneWalls() {
+  for (int32_t id = 0; id < bb_.wallExtent(); ++id) {
+    const WallHyp& w = bb_.wall(id);
+    if (!w.alive) continue;
+    wall_slots_.clear();
+    bb_.beginCollect();
+    bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+    if (!wall_slots_.empty()) continue;
+    bb_.killWall(id);
+    bb_.releaseWall(id);
+  }
+}
+
+void Sampler::mapWalls(std::vector<WallHyp>& out) const {
+  out.clear();
+  for (int32_t id = 0; id < bb_.wallExtent(); ++id)
+    if (bb_.wall(id).alive) out.push_back(bb_.wall(id));
+}
+
+}  // namespace crunch

@@ -1,0 +1,121 @@
+#include "crunch/mapping/wall_fusion.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace crunch {
+
+namespace {
+struct Member {
+  int chain;
+  Vec2 a, b;
+  double length;
+};
+
+struct Group {
+  Vec2 centre;  // a point of the line
+  Vec2 dir;     // unit direction
+  double weight = 0;
+  double t0 = 0, t1 = 0;  // extent along the line
+  std::vector<Member> members;
+
+  void add(const Member& m) {
+    Vec2 d = (m.b - m.a) / std::max(m.length, 1e-12);
+    if (members.empty()) {
+      centre = 0.5 * (m.a + m.b);
+      dir = d;
+      t0 = -0.5 * m.length;
+      t1 = 0.5 * m.length;
+    } else {
+      if (d.dot(dir) < 0) d = -d;
+      const double w = weight + m.length;
+      Vec2 nd = weight * dir + m.length * d;
+      nd /= nd.norm();
+      const Vec2 nc = (weight * centre + m.length * 0.5 * (m.a + m.b)) / w;
+      // Re-express the extent on the new line.
+      const Vec2 e0 = centre + t0 * dir, e1 = centre + t1 * dir;
+      centre = nc;
+      dir = nd;
+      t0 = std::min({(e0 - centre).dot(dir), (e1 - centre).dot(dir), (m.a - centre).dot(dir),
+                     (m.b - centre).dot(dir)});
+      t1 = std::max({(e0 - centre).dot(dir), (e1 - centre).dot(dir), (m.a - centre).dot(dir),
+                     (m.b - centre).dot(dir)});
+    }
+    weight += m.length;
+    members.push_back(m);
+  }
+
+  bool accepts(const Member& m, const WallFuseOptions& opt) const {
+    const Vec2 d = (m.b - m.a) / std::max(m.length, 1e-12);
+    if (std::abs(wrapPeriod(std::atan2(d.y(), d.x()) - std::atan2(dir.y(), dir.x()), kPi)) >
+        opt.angle)
+      return false;
+    const auto across = [&](const Vec2& q) {
+      const Vec2 v = q - centre;
+      return std::abs(v.x() * dir.y() - v.y() * dir.x());
+    };
+    if (across(m.a) > opt.offset || across(m.b) > opt.offset) return false;
+    const double ma = (m.a - centre).dot(dir), mb = (m.b - centre).dot(dir);
+    return std::min(ma, mb) <= t1 + opt.gap && std::max(ma, mb) >= t0 - opt.gap;
+  }
+};
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+}  // namespace
+
+std::vector<MapWall> fuseWalls(const std::vector<std::vector<WallHyp>>& chains,
+                               const WallFuseOptions& opt) {
+  // Longest walls first: they fix the lines the shorter pieces join.
+  std::vector<Member> all;
+  for (size_t c = 0; c < chains.size(); ++c)
+    for (const WallHyp& w : chains[c])
+      if (w.length() > 0) all.push_back({static_cast<int>(c), w.a, w.b, w.length()});
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Member& x, const Member& y) { return x.length > y.length; });
+  std::vector<Group> groups;
+  for (const Member& m : all) {
+    auto it = std::find_if(groups.begin(), groups.end(),
+                           [&](const Group& g) { return g.accepts(m, opt); });
+    if (it == groups.end()) {
+      groups.emplace_back();
+      groups.back().add(m);
+    } else {
+      it->add(m);
+    }
+  }
+  std::vector<MapWall> out;
+  const double n_chains = std::max<double>(1.0, static_cast<double>(chains.size()));
+  for (const Group& g : groups) {
+    // Per chain: the extent of its pieces along the group's line.
+    std::vector<double> lo, hi;
+    for (size_t c = 0; c < chains.size(); ++c) {
+      double a = 0, b = 0;
+      bool any = false;
+      for (const Member& m : g.members) {
+        if (m.chain != static_cast<int>(c)) continue;
+        const double ta = (m.a - g.centre).dot(g.dir), tb = (m.b - g.centre).dot(g.dir);
+        a = any ? std::min({a, ta, tb}) : std::min(ta, tb);
+        b = any ? std::max({b, ta, tb}) : std::max(ta, tb);
+        any = true;
+      }
+      if (any) {
+        lo.push_back(a);
+        hi.push_back(b);
+      }
+    }
+    const double score = static_cast<double>(lo.size()) / n_chains;
+    if (score < opt.min_score) continue;
+    MapWall w;
+    w.a = g.centre + median(lo) * g.dir;
+    w.b = g.centre + median(hi) * g.dir;
+    w.score = score;
+    out.push_back(w);
+  }
+  return out;
+}
+
+}  // namespace crunch

@@ -1,0 +1,180 @@
+// Walls as blackboard hypotheses (ObjectModel::kWalls, issue 13): the kernel, the log joint's
+// wall terms against brute force for every wall move, and what the sampler makes of shapelets
+// along a wall.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+#include "crunch/blackboard/blackboard.h"
+#include "crunch/blackboard/factors.h"
+#include "crunch/blackboard/sampler.h"
+#include "test_builders.h"
+
+using namespace crunch;
+using crunch::testing::TableShapelets;
+
+namespace {
+ModelParams rooms() {
+  ModelParams p;
+  p.objects = ObjectModel::kWalls;
+  return p;
+}
+
+// Shapelets every `step` metres along the wall surface from a to b, sensed from the left of
+// a->b (0.1 m off it), with a small deterministic wobble in position and angle.
+std::vector<Shapelet> wallShapelets(const Vec2& a, const Vec2& b, double step, double wobble) {
+  std::vector<Shapelet> out;
+  const double len = (b - a).norm();
+  const Vec2 d = (b - a) / len, n{-d.y(), d.x()};
+  int k = 0;
+  for (double t = 0; t <= len + 1e-9; t += step, ++k) {
+    const double w = wobble * ((k % 3) - 1);
+    const Vec2 p = a + t * d + w * n;
+    Shapelet s;
+    s.x = p.x();
+    s.y = p.y();
+    s.phi = wrapPeriod(std::atan2(d.y(), d.x()) + 0.5 * w, kPi);
+    s.ox = p.x() + 0.1 * n.x();
+    s.oy = p.y() + 0.1 * n.y();
+    out.push_back(s);
+  }
+  return out;
+}
+
+double liveWallLength(const Blackboard& bb) {
+  double len = 0;
+  for (int32_t i = 0; i < bb.wallExtent(); ++i)
+    if (bb.wall(i).alive) len += bb.wall(i).length();
+  return len;
+}
+}  // namespace
+
+TEST_CASE("deltaWS: distance to the segment and angle modulo pi, as eq. 12", "[blackboard]") {
+  const ModelParams p = rooms();
+  WallHyp w;
+  w.a = {0, 0};
+  w.b = {1, 0};
+  Shapelet s;
+  s.x = 0.5;
+  s.y = 0.0;
+  s.phi = 0.0;
+  s.ox = 0.5;
+  s.oy = 0.1;  // sensed from the free side, the left of a->b
+  CHECK(deltaWS(w, s, p) == Approx(0.0).margin(1e-12));
+  s.phi = kPi;  // a line direction: the same surface
+  CHECK(deltaWS(w, s, p) == Approx(0.0).margin(1e-12));
+  s.phi = p.sigma_theta_shapelet;
+  CHECK(deltaWS(w, s, p) == Approx(1.0));
+  s.phi = 0.0;
+  s.y = p.sigma_r_shapelet;
+  CHECK(deltaWS(w, s, p) == Approx(1.0));
+  s.x = 1.0 + p.sigma_r_shapelet;  // beyond the end: distance to the end point
+  s.y = 0.0;
+  CHECK(deltaWS(w, s, p) == Approx(1.0));
+  s.oriented = false;  // a point contact has no angle term
+  s.x = 0.5;
+  s.phi = 1.0;
+  CHECK(deltaWS(w, s, p) == Approx(0.0).margin(1e-12));
+  CHECK(logWallKernel(w, s, p) == Approx(std::log(p.alpha_W)));
+  s.oy = -0.1;  // sensed from behind the surface: not this face's contact
+  CHECK(std::isinf(logWallKernel(w, s, p)));
+}
+
+TEST_CASE("Blackboard: a wall joins the shapelets' noisy-OR and pays its prior and length",
+          "[blackboard]") {
+  const ModelParams p = rooms();
+  Blackboard bb(p, 64, 64);
+  for (const Shapelet& s : wallShapelets({0.5, 0.5}, {1.5, 0.5}, 0.05, 0.0)) bb.pushShapelet(s);
+  const double e0 = bb.totalEnergy();
+  const int32_t id = bb.addWall({0.5, 0.5}, {1.5, 0.5});
+  const double gain = bb.totalEnergy() - e0;
+  // 21 shapelets each go from log c_S to log(c_S + alpha_W); the wall costs its odds and 1 m.
+  const double expect = 21 * (std::log(p.c_S + p.alpha_W) - std::log(p.c_S)) +
+                        logPresenceOdds(std::log(p.c_W), p) - p.wall_cost_per_m * 1.0;
+  CHECK(gain == Approx(expect).epsilon(1e-9));
+  // A table behind the surface (its top in the wall's solid) is charged eps_b; one standing
+  // against its free face is not, nor one beyond a wall 2 cm thick.
+  const double e1 = bb.totalEnergy();
+  const int32_t t = bb.addTable({1.0, 0.5 - 0.25, 0.0});
+  const double behind = bb.totalEnergy() - e1;
+  bb.killTable(t);
+  const int32_t f = bb.addTable({1.0, 0.5 + 0.25, 0.0});
+  const double in_front = bb.totalEnergy() - e1;
+  bb.killTable(f);
+  bb.addTable({1.0, 0.5 - 0.02 - 0.25, 0.0});
+  const double beyond = bb.totalEnergy() - e1;
+  CHECK(behind - in_front == Approx(std::log(p.eps_b)));
+  CHECK(beyond == Approx(in_front));
+  bb.killWall(id);
+  CHECK(bb.liveWalls() == 0);
+}
+
+TEST_CASE("Sampler: every wall move's local energy change equals the brute-force change",
+          "[blackboard]") {
+  const ModelParams p = rooms();
+  Blackboard bb(p, 256, 256);
+  FreeSpaceGrid free({0, 0}, {3, 3});
+  Rng rays(5);
+  for (int i = 0; i < 300; ++i) {  // rays, some crossing the wall's line beyond its contacts
+    const Vec2 a{rays.uniform(0.2, 2.8), rays.uniform(0.2, 1.2)};
+    const double h = rays.uniform(0, 2 * kPi);
+    free.addRay({a, a + 0.14 * Vec2{std::cos(h), std::sin(h)}});
+  }
+  bb.setFreeSpace(&free);
+  for (const Shapelet& s : wallShapelets({0.3, 0.4}, {1.2, 0.4}, 0.03, 0.004)) bb.pushShapelet(s);
+  for (const Shapelet& s : wallShapelets({1.5, 0.41}, {2.4, 0.41}, 0.03, 0.004)) bb.pushShapelet(s);
+  for (const Shapelet& s : wallShapelets({2.6, 0.3}, {2.6, 1.6}, 0.04, 0.003)) bb.pushShapelet(s);
+  for (const auto& s : TableShapelets({1.3, 0.75, 0.1}, p, {0, 1, 2, 3})) bb.pushShapelet(s);
+  Rng rng(17);
+  SamplerOptions opt;
+  opt.prime_sigma_r = 0.02;
+  opt.wall_birth_rate = 0.5;
+  Sampler sampler(bb, opt, rng);
+  sampler.setAudit(true);
+  int most_walls = 0;
+  for (double beta : {0.05, 0.3, 1.0, 5.0, 50.0}) {
+    for (int i = 0; i < 4; ++i) {
+      sampler.sweep(beta);
+      most_walls = std::max(most_walls, bb.liveWalls());
+    }
+    sampler.prune();
+  }
+  CHECK(most_walls >= 2);  // walls were born and moved, so the audit covered their moves
+  CHECK(sampler.stats().proposals > 1000);
+  CHECK(sampler.stats().audit_max_error < 1e-9);
+}
+
+TEST_CASE("Sampler: contacts along a wall become a wall, not a table", "[blackboard]") {
+  const ModelParams p = rooms();
+  Blackboard bb(p, 256, 256);
+  // An L of two walls: a corner, where a table's legs could most easily stand.
+  for (const Shapelet& s : wallShapelets({0.3, 0.3}, {1.8, 0.3}, 0.04, 0.003)) bb.pushShapelet(s);
+  for (const Shapelet& s : wallShapelets({0.3, 1.8}, {0.3, 0.35}, 0.04, 0.003)) bb.pushShapelet(s);
+  Rng rng(3);
+  Sampler sampler(bb, {}, rng);
+  sampler.anneal();
+  std::vector<Pose2> tables;
+  sampler.mapTables(tables);
+  CHECK(tables.empty());
+  std::vector<WallHyp> walls;
+  sampler.mapWalls(walls);
+  CHECK(walls.size() >= 2);
+  CHECK(walls.size() <= 4);
+  CHECK(liveWallLength(bb) > 0.9 * 2 * 1.45);
+  CHECK(liveWallLength(bb) < 1.1 * 2 * 1.5);
+  for (const WallHyp& w : walls) {
+    const bool horizontal = std::abs(wrapPeriod(w.angle(), kPi)) < 0.05;
+    const bool vertical = std::abs(std::abs(wrapPeriod(w.angle(), kPi)) - kPi / 2) < 0.05;
+    CHECK((horizontal || vertical));
+  }
+}
+
+TEST_CASE("Sampler: the paper's model never makes a wall", "[blackboard]") {
+  ModelParams p;  // kPaper
+  Blackboard bb(p, 64, 64);
+  for (const Shapelet& s : wallShapelets({0.3, 0.3}, {1.8, 0.3}, 0.04, 0.003)) bb.pushShapelet(s);
+  Rng rng(3);
+  Sampler sampler(bb, {}, rng);
+  sampler.anneal();
+  CHECK(bb.wallExtent() == 0);
+}
