@@ -9,6 +9,9 @@
 #   (c) scale: bench/scale_bench, cost per proposal and memory against 1e2 .. 1e5 shapelets
 #       (docs/RESULTS.md "Scale"; about 2 min), charts docs/img/results/scale*.png.
 #   (d) blackboard snapshots at pose 120 of the default arena, cold and hot.
+#   (e) models: --model paper,walls,rooms x --noise-scale 1,2,5 x schedule-steps 4,8,16 x seeds
+#       1-3 (81 runs): accuracy against cost per object model and each model against noise
+#       (docs/RESULTS.md "Object models"), docs/img/results/models/.
 # The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
 # sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N]
 set -euo pipefail
@@ -39,4 +42,8 @@ build/default/bench/scale_bench --chart "$IMG/scale"
 cp "$RAW/snap_cold/snapshot_120.png" "$IMG/snapshot_default_120.png"
 "$BIN" --sim --snapshot 120 --snapshot-temperature 0 --out "$RAW/snap_hot" >/dev/null
 cp "$RAW/snap_hot/snapshot_120.png" "$IMG/snapshot_default_120_hot.png"
+"$BIN" sweep --model paper,walls,rooms --noise-scale 1,2,5 --schedule-steps 4,8,16 --seeds 3 \
+    --jobs "$JOBS" --out "$RAW/models"
+"$BIN" sweep-chart --in "$RAW/models" --out "$IMG/models"
+cp "$RAW/models/sweep.csv" "$IMG/models/sweep.csv"
 echo "make-results: sweeps, scale and charts in $(( $(date +%s) - start )) s; charts in $IMG/"
