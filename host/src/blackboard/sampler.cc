@@ -542,6 +542,15 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   const int32_t table = bb_.addTable(pose);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
+  if (decideNewTable(table, pose, free_turn, t, e0, beta)) return;
+  bb_.setParent(leg, l.parent);
+  for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
+  bb_.killTable(table);
+  bb_.releaseTable(table);
+}
+
+bool Sampler::decideNewTable(int32_t table, const Pose2& pose, bool free_turn, Touched& t,
+                             double e0, double beta) {
   // Legs whose orientation nothing but their table constrains turn with it.
   IdSet<5> turned;
   std::array<Pose2, 5> turned_from;
@@ -566,14 +575,11 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   const double e1 = bb_.localEnergy(t);
   if (decide(e1 - e0, beta)) {
     for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
-    return;
+    return true;
   }
   for (int i = 0; i < turned.n; ++i) bb_.moveLeg(turned.ids[i], turned_from[static_cast<size_t>(i)]);
   for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
-  bb_.setParent(leg, l.parent);
-  for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
-  bb_.killTable(table);
-  bb_.releaseTable(table);
+  return false;
 }
 
 bool Sampler::legDirectlyLinked(int32_t leg) const {
@@ -1369,33 +1375,7 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   for (int32_t o : adopt.span()) bb_.setLegSide(o, table_leg);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
-  IdSet<5> turned;
-  std::array<Pose2, 5> turned_from;
-  if (free_turn) {
-    for (int32_t o : t.legs.span()) {
-      if (bb_.leg(o).parent != table || !pointSupported(bb_.leg(o).pose.position())) continue;
-      turned_from[static_cast<size_t>(turned.n)] = bb_.leg(o).pose;
-      turned.add(o);
-      Pose2 q = bb_.leg(o).pose;
-      q.theta = wrapPeriod(pose.theta, kPi / 2);
-      bb_.moveLeg(o, q);
-    }
-  }
-  IdSet<8> emptied;
-  for (int32_t tab : t.tables.span()) {
-    if (bb_.table(tab).n_children == 0) {
-      emptied.add(tab);
-      bb_.killTable(tab);
-    }
-  }
-  t.tables.add(table);
-  const double e1 = bb_.localEnergy(t);
-  if (decide(e1 - e0, beta)) {
-    for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
-    return;
-  }
-  for (int i = 0; i < turned.n; ++i) bb_.moveLeg(turned.ids[i], turned_from[static_cast<size_t>(i)]);
-  for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
+  if (decideNewTable(table, pose, free_turn, t, e0, beta)) return;
   bb_.setParent(leg, l.parent);
   for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
   bb_.setLegSide(leg, old_side[0]);

@@ -252,6 +252,13 @@ class Sampler {
   // A signed centre-to-centre span of one side of a table proposed for a leg of `leg_side`,
   // drawn from the prior's range; `other` is the other side's span (0: unknown).
   double priorSpan(double leg_side, double other);
+  // The end of a table birth that adopted legs (proposeParent, proposeParentSized): `table` is
+  // live with its children set, `t` what the move touches, e0 its energy before. Turns the
+  // children only point contacts support to the table's axes (free_turn), kills the tables the
+  // move emptied, and decides. Accepted: releases them, true. Refused: turns the legs back and
+  // revives those tables, false (the caller restores parents and removes `table`).
+  bool decideNewTable(int32_t table, const Pose2& pose, bool free_turn, Touched& t, double e0,
+                      double beta);
   bool legDirectlyLinked(int32_t leg) const;
   // Samples a parent for a leg at `leg` among tables with a corner near it and the null prior,
   // weighted by their densities (eq. 9 vs eq. 13); `exclude` is never chosen.
