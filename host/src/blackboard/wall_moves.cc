@@ -207,6 +207,11 @@ void Sampler::jitterWall(int32_t id, double beta) {
   const Vec2 nrm = len > 0 ? Vec2{-h.y() / (0.5 * len), h.x() / (0.5 * len)} : Vec2{0, 0};
   const Vec2 m2 = mid + rng_.normal(0, opt_.wall_jitter_r) * nrm;
   const Vec2 a = m2 - h, b = m2 + h;
+  moveWallTo(id, a, b, beta);
+}
+
+void Sampler::moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta) {
+  const WallHyp w = bb_.wall(id);
   wall_slots_.clear();
   bb_.beginCollect();
   bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
@@ -233,17 +238,7 @@ void Sampler::extendWall(int32_t id, double beta) {
   if (len + step < bb_.params().wall_min_length) return;
   const Vec2 a = move_b ? w.a : Vec2(w.a - step * dir);
   const Vec2 b = move_b ? Vec2(w.b + step * dir) : w.b;
-  wall_slots_.clear();
-  bb_.beginCollect();
-  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
-  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
-  Touched t;
-  t.walls.add(id);
-  begin();
-  const double e0 = bb_.localEnergy(t, wall_slots_);
-  bb_.moveWall(id, a, b);
-  const double e1 = bb_.localEnergy(t, wall_slots_);
-  if (!decide(e1 - e0, beta)) bb_.moveWall(id, w.a, w.b);
+  moveWallTo(id, a, b, beta);
 }
 
 void Sampler::mergeWall(int32_t id, double beta) {

@@ -259,6 +259,9 @@ class Sampler {
   // revives those tables, false (the caller restores parents and removes `table`).
   bool decideNewTable(int32_t table, const Pose2& pose, bool free_turn, Touched& t, double e0,
                       double beta);
+  // Proposes wall `id` at a..b (jitterWall, extendWall): the shapelets near the old and the
+  // new segment are touched; refused, the wall goes back.
+  void moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta);
   bool legDirectlyLinked(int32_t leg) const;
   // Samples a parent for a leg at `leg` among tables with a corner near it and the null prior,
   // weighted by their densities (eq. 9 vs eq. 13); `exclude` is never chosen.
