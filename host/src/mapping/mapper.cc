@@ -222,7 +222,8 @@ Mapper::Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,
       rng_(options.seed ^ 0xB1ACB0A2Dull),
       board_(options.model, options.working_memory, 4096),
       sampler_(board_, options.sampler, rng_),
-      free_space_(lo, hi) {
+      free_space_(lo, hi),
+      sample_rng_(options.seed ^ 0x5A3B1E5ull) {
   // Tables of different sizes at one spot are different objects (a chair and a table).
   options_.fuse.compare_sizes = options_.model.sized();
 }
@@ -259,6 +260,33 @@ int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,
   }
   if (options_.after_pose) options_.after_pose(t, pose, fresh > 0, board_);
   return fresh;
+}
+
+void Mapper::drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out) {
+  const std::vector<Shapelet>& run = map_.shapelets;
+  if (run.empty() || n <= 0) return;
+  const bool fresh = sample_fed_ < run.size();
+  if (!sample_board_ || static_cast<std::size_t>(sample_board_->workingMemoryCapacity()) < run.size()) {
+    const int capacity = static_cast<int>(std::max<std::size_t>(256, 2 * run.size()));
+    sample_sampler_.reset();
+    sample_board_ = std::make_unique<Blackboard>(options_.model, capacity, 4 * capacity + 64);
+    sample_board_->setFreeSpace(options_.negative_evidence ? &free_space_ : nullptr);
+    sample_sampler_ = std::make_unique<Sampler>(*sample_board_, options_.sampler, sample_rng_);
+    sample_fed_ = 0;
+  }
+  for (; sample_fed_ < run.size(); ++sample_fed_) sample_board_->pushShapelet(run[sample_fed_]);
+  if (fresh) sample_sampler_->anneal();
+  for (int i = 0; i < n; ++i) {
+    for (int s = 0; s < sweeps_between; ++s) sample_sampler_->sweep(beta);
+    MapSample draw;
+    mapTablesOf(*sample_sampler_, options_.model, draw.tables, sized_tables_);
+    if (options_.model.walled()) {
+      std::vector<WallHyp> walls;
+      sample_sampler_->mapWalls(walls);
+      for (const WallHyp& w : walls) draw.walls.push_back({w.a, w.b, 1.0});
+    }
+    out.push_back(std::move(draw));
+  }
 }
 
 Map Mapper::snapshot() const {

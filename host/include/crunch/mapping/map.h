@@ -49,6 +49,13 @@ struct MapStats {
   int peak_live_legs = 0;
 };
 
+// One draw of the map from a sampler's chain (Mapper::drawSamples): its live tables (each of
+// its own size under the rooms model) and walls. What exploration predicts from.
+struct MapSample {
+  std::vector<MapTable> tables;
+  std::vector<MapWall> walls;
+};
+
 struct Map {
   std::vector<MapTable> tables;  // the fused map
   std::vector<MapWall> walls;    // none yet: walls are not modelled (paper's future work)

@@ -14,6 +14,8 @@
 // sampler references the blackboard). Thread-safety: none.
 #pragma once
 
+#include <memory>
+
 #include <chrono>
 #include <span>
 #include <vector>
@@ -52,6 +54,17 @@ class Mapper {
   // (each counted when its annealing ends); snapshot() gives the per-pose maxima so far.
   Map finish();
 
+  // Posterior draws of the whole run's map, for exploration (exploration/policy.h): a chain
+  // that persists across calls over every shapelet so far (a blackboard whose working memory
+  // holds the run, with the negative evidence, as the global inference's). Shapelets sensed
+  // since the last call join it and it is annealed once (the model's schedule, ending cold);
+  // then `n` draws are appended to `out`, each the chain's state after `sweeps_between` sweeps
+  // at inverse temperature `beta` (1: the posterior itself, the paper's "hot sampler" of
+  // §2.9). Draws from its own stream (seeded from options.seed), so a run that draws samples
+  // maps the same per-pose MAPs as one that does not. No draws (out unchanged) before any
+  // shapelet.
+  void drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out);
+
   int poses() const { return pose_count_; }
   const std::vector<WhiskerMount>& mounts() const { return mounts_; }
 
@@ -67,6 +80,12 @@ class Mapper {
   int pose_count_ = 0;
   std::vector<Pose2> tables_;  // scratch for MAP_t
   std::vector<TableHyp> sized_tables_;  // the same with sizes (the rooms model)
+  // drawSamples' chain over the whole run, built at the first call and rebuilt larger when the
+  // run outgrows its working memory; sample_fed_ shapelets of map_.shapelets are on it.
+  Rng sample_rng_;
+  std::unique_ptr<Blackboard> sample_board_;
+  std::unique_ptr<Sampler> sample_sampler_;
+  std::size_t sample_fed_ = 0;
 };
 
 // A table of the model's one size at `pose`.

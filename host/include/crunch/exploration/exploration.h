@@ -1,0 +1,56 @@
+// An exploration run's settings and what it reports (ARCHITECTURE.md §4: report.json
+// `exploration`, the --explore, --travel-budget, --whisk-budget flags; docs/EXPLORATION.md).
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
+#include "crunch/exploration/path_planner.h"
+#include "crunch/exploration/policy.h"
+
+namespace crunch::exploration {
+
+struct ExploreOptions {
+  ExplorePolicyKind policy = ExplorePolicyKind::kGrid;
+  // --teleport: the paper's idealisation, the robot jumps from whisk pose to whisk pose (travel
+  // is still measured, as the straight-line distance). Off: the base drives the planned path.
+  bool teleport = false;
+  double travel_budget_m = std::numeric_limits<double>::infinity();  // > 0
+  int whisk_budget = 0;          // 0: none; else >= 1
+  PolicyOptions policy_options;
+  PlannerOptions planner;
+  double cell = 0.05;            // KnownSpace cell, metres; 0.01..0.5
+
+  // okStatus(), or an Error naming the flag: "--travel-budget -1: ...", "--whisk-budget ...".
+  Status validate() const;
+};
+
+// One point of the recall-against-travel curve, after a whisk.
+struct CurvePoint {
+  double travel_m = 0.0;
+  int whisks = 0;
+  double recall = 0.0;
+  double precision = 0.0;
+  double f1 = 0.0;
+};
+
+// report.json `exploration`.
+struct ExplorationReport {
+  std::string policy;
+  double travel_m = 0.0;
+  int whisks = 0;
+  int bumps = 0;
+  double sim_time_s = 0.0;        // simulated (sim) or the base's (robot) seconds
+  double decision_ms = 0.0;       // mean wall time of one policy decision
+  double decision_ms_max = 0.0;
+  std::string stop_reason;        // e.g. "travel budget reached", "no candidate worth its travel"
+  std::vector<CurvePoint> curve;  // empty without ground truth (the robot)
+  std::vector<Pose2> path;        // the base's poses as driven, sampled every ~5 cm
+  std::vector<Pose2> whisk_poses; // where each whisk began
+  std::vector<Vec2> bump_points;  // where the bumper hit
+};
+
+}  // namespace crunch::exploration

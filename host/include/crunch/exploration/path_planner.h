@@ -1,0 +1,74 @@
+// Getting to a chosen whisk pose: A* over the KnownSpace grid (8-connected, octile heuristic),
+// the well-known grid planner of mobile robotics, on a configuration space built the usual way:
+// every occupied cell is grown by the Create's radius plus a margin (Minkowski inflation), so
+// the robot is a point on the grid. Unknown cells are traversable (the free-space assumption:
+// plan optimistically, replan when a bump or a contact says otherwise) at a cost factor > 1, so
+// known free space is preferred. The path is shortened by line-of-sight over the inflated grid.
+//
+// DistanceField is the same search run as Dijkstra from the robot to every cell (one search per
+// decision), so a policy scores hundreds of candidate poses by their path length at the cost of
+// one search.
+//
+// Units: metres. Thread-safety: none. Allocation: in the calls (the search's open list and
+// the result), never in a hot loop of the sampler.
+#pragma once
+
+#include <limits>
+#include <optional>
+#include <vector>
+
+#include "crunch/core/geometry.h"
+#include "crunch/core/result.h"
+#include "crunch/exploration/known_space.h"
+#include "crunch/robot/whiskers.h"  // kRobotRadius
+
+namespace crunch::exploration {
+
+struct PlannerOptions {
+  double robot_radius = kRobotRadius;  // the Create's
+  double margin = 0.03;                // clearance beyond the radius, metres; >= 0
+  double unknown_cost = 1.5;           // cost per metre through unknown cells, relative to free
+
+  // robot_radius > 0, margin >= 0, unknown_cost >= 1 (all finite); an Error naming the field.
+  Status validate() const;
+};
+
+// The configuration space: true where the robot's centre may not stand.
+class Costmap {
+ public:
+  Costmap(const KnownSpace& known, const PlannerOptions& options);
+  bool blocked(int ix, int iy) const;  // true outside the grid
+  bool blocked(const Vec2& p) const;
+  const KnownSpace& known() const { return known_; }
+  const PlannerOptions& options() const { return options_; }
+
+ private:
+  const KnownSpace& known_;
+  PlannerOptions options_;
+  std::vector<std::uint8_t> blocked_;
+};
+
+struct PathPlan {
+  std::vector<Vec2> waypoints;  // from the start (excluded) to the goal (included)
+  double length = 0.0;          // metres along the waypoints
+};
+
+// The shortest path from `from` to `to` on the costmap, or nullopt when the goal is blocked or
+// unreachable. A start inside an inflated obstacle (after a bump) may leave it by the shortest
+// way out.
+std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const Vec2& to);
+
+// Path cost from one start to every cell (Dijkstra on the same graph as planPath).
+class DistanceField {
+ public:
+  DistanceField(const Costmap& costmap, const Vec2& from);
+  // Metres (cost-weighted) to the cell holding p; infinity if blocked or unreachable.
+  double to(const Vec2& p) const;
+  double to(int ix, int iy) const;
+
+ private:
+  const Costmap& costmap_;
+  std::vector<double> dist_;
+};
+
+}  // namespace crunch::exploration
