@@ -31,6 +31,7 @@
 #include <string>
 #include <vector>
 
+#include "crunch/exploration/exploration.h"
 #include "crunch/mapping/evaluation.h"
 #include "crunch/mapping/map.h"
 #include "crunch/mapping/mapping_options.h"
@@ -74,6 +75,10 @@ struct SimRunOptions {
   std::optional<int> snapshot_pose;
   std::optional<int> snapshot_temperature;
   std::mutex* world_mutex = nullptr;  // see Thread-safety above; null: one thread
+  // --explore and its flags (exploration/exploration.h; docs/EXPLORATION.md). nullopt: the
+  // scene's pose list visited in order by teleporting, the paper's §2.8 run (every figure and
+  // golden file so far).
+  std::optional<exploration::ExploreOptions> explore;
 };
 
 // The physics path's own measurements, and the gaussian run on the same scene beside them.
@@ -92,6 +97,8 @@ struct SimRun {
   std::optional<PhysicsSummary> physics;
   std::optional<BlackboardSnapshot> snapshot;
   std::string warning;  // empty, or why an asked-for snapshot was not taken
+  // report.json `exploration` (with the recall-against-travel curve): set when options.explore is.
+  std::optional<exploration::ExplorationReport> exploration;
 };
 
 Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& options);
