@@ -48,6 +48,7 @@ struct CurvePoint {
 // report.json `exploration`.
 struct ExplorationReport {
   std::string policy;
+  bool teleport = false;          // --teleport: travel is the straight-line distance
   double travel_m = 0.0;
   int whisks = 0;
   int bumps = 0;
