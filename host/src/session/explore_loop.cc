@@ -175,8 +175,11 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
   track(pose);
 
   if (base_.bumped() && (phase_ == Phase::kFollow || phase_ == Phase::kAlign)) {
-    const Vec2 hit = pose.position() + options_.explore.planner.robot_radius *
-                                           Vec2(std::cos(pose.theta), std::sin(pose.theta));
+    std::optional<Vec2> told;
+    if (hooks_.bump_point) told = hooks_.bump_point(pose);
+    const Vec2 hit = told ? *told
+                          : pose.position() + options_.explore.planner.robot_radius *
+                                                  Vec2(std::cos(pose.theta), std::sin(pose.theta));
     known_.markBump(hit);
     ++report_.bumps;
     ++goal_bumps_;

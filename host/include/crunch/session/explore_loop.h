@@ -10,8 +10,8 @@
 //   -> Hooks::whisked(pose where the whisk began): the caller senses and maps, and marks the
 //      KnownSpace (free rays, contacts, the map's obstacles)
 //   -> decide again.
-// A bump (base.bumped()) while driving or turning: stop, record the bump point (the body's front
-// on its heading, radius kRobotRadius) as occupied in the KnownSpace and in the report, back off
+// A bump (base.bumped()) while driving or turning: stop, record the bump point (Hooks::bump_point,
+// else the body's front on its heading, radius kRobotRadius) as occupied in the KnownSpace and in the report, back off
 // `backoff`, replan to the same goal (a new decision if it is now unreachable, or after
 // max_bumps_per_goal bumps on the way to it: the bumper says only that the front hit something,
 // so an object met at the side can bump again).
@@ -71,6 +71,9 @@ class ExploreLoop {
     std::function<void(const Pose2& pose)> whisked;
     // n posterior draws for the policy (when it wants any); unset: none.
     std::function<void(int n, std::vector<MapSample>& out)> samples;
+    // Where the body hit, if the base can tell (the simulator knows the obstacle; the Create's
+    // bumpers say only left/right). Unset or nullopt: the body's front point on its heading.
+    std::function<std::optional<Vec2>(const Pose2& pose)> bump_point;
   };
 
   // Asserts options.validate(). Marks the body's disc at the start as free.
