@@ -52,24 +52,82 @@ void InfogainPolicy::prepare(const ExploreState& state) {
   stamp_now_ = 0;
 }
 
-double InfogainPolicy::sampleBits(const Pose2& pose) {
+void InfogainPolicy::gather(const Vec2& position) {
   const size_t n = obstacles_.size();
-  if (n < 2) return 0.0;
-  bool any = false;
-  for (const WhiskObstacles& o : obstacles_) any = any || predictor_.anyInReach(pose.position(), o);
-  if (!any) return 0.0;  // every draw predicts no touch: one outcome
-  for (size_t i = 0; i < n; ++i) predictor_.predict(pose, obstacles_[i], outcomes_[i]);
+  near_legs_.clear();
+  near_walls_.clear();
+  leg_begin_.assign(n + 1, 0);
+  wall_begin_.assign(n + 1, 0);
+  uniq_.assign(n, 0);
+  any_near_ = false;
+  for (size_t i = 0; i < n; ++i) {
+    leg_begin_[i] = static_cast<int>(near_legs_.size());
+    wall_begin_[i] = static_cast<int>(near_walls_.size());
+    predictor_.nearReach(position, obstacles_[i], near_legs_, near_walls_);
+    leg_begin_[i + 1] = static_cast<int>(near_legs_.size());
+    wall_begin_[i + 1] = static_cast<int>(near_walls_.size());
+    any_near_ = any_near_ || leg_begin_[i + 1] > leg_begin_[i] || wall_begin_[i + 1] > wall_begin_[i];
+  }
+  // Draws whose objects within reach are the same geometry predict the same outcome: predict
+  // once per distinct set (a chain's draws often differ only far away).
+  auto same = [&](size_t a, size_t b) {
+    const int na = leg_begin_[a + 1] - leg_begin_[a], nb = leg_begin_[b + 1] - leg_begin_[b];
+    const int wa = wall_begin_[a + 1] - wall_begin_[a], wb = wall_begin_[b + 1] - wall_begin_[b];
+    if (na != nb || wa != wb) return false;
+    for (int k = 0; k < na; ++k) {
+      const OrientedRect& x = obstacles_[a].legs[static_cast<size_t>(near_legs_[static_cast<size_t>(leg_begin_[a] + k)])];
+      const OrientedRect& y = obstacles_[b].legs[static_cast<size_t>(near_legs_[static_cast<size_t>(leg_begin_[b] + k)])];
+      if (x.pose.x != y.pose.x || x.pose.y != y.pose.y || x.pose.theta != y.pose.theta ||
+          x.size_x != y.size_x || x.size_y != y.size_y)
+        return false;
+    }
+    for (int k = 0; k < wa; ++k) {
+      const MapWall& x = obstacles_[a].walls[static_cast<size_t>(near_walls_[static_cast<size_t>(wall_begin_[a] + k)])];
+      const MapWall& y = obstacles_[b].walls[static_cast<size_t>(near_walls_[static_cast<size_t>(wall_begin_[b] + k)])];
+      if (x.a != y.a || x.b != y.b) return false;
+    }
+    return true;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    uniq_[i] = static_cast<int>(i);
+    for (size_t j = 0; j < i; ++j)
+      if (uniq_[j] == static_cast<int>(j) && same(i, j)) {
+        uniq_[i] = static_cast<int>(j);
+        break;
+      }
+  }
+}
+
+double InfogainPolicy::sampleBits(const Pose2& pose) {
+  // Requires gather(pose.position()).
+  const size_t n = obstacles_.size();
+  if (n < 2 || !any_near_) return 0.0;  // every draw predicts no touch: one outcome
+  // Every draw has the same objects within reach: one outcome, whatever it is.
+  if (std::all_of(uniq_.begin(), uniq_.end(), [](int u) { return u == 0; })) return 0.0;
   // Partition the draws by outcome (greedy: a draw joins the first class whose representative
   // it matches). H(Y) of the partition; H(Y | M) = 0 for a deterministic quantised prediction.
   cls_count_.assign(n, 0);
+  cls_of_.assign(n, -1);
   std::vector<size_t>& rep = rep_scratch_;
   rep.clear();
   for (size_t i = 0; i < n; ++i) {
+    const size_t u = static_cast<size_t>(uniq_[i]);
+    if (u != i) {  // the same objects within reach as draw u: its outcome
+      ++cls_count_[static_cast<size_t>(cls_of_[u])];
+      cls_of_[i] = cls_of_[u];
+      continue;
+    }
+    const std::span<const int> legs(near_legs_.data() + leg_begin_[i],
+                                    static_cast<size_t>(leg_begin_[i + 1] - leg_begin_[i]));
+    const std::span<const int> walls(near_walls_.data() + wall_begin_[i],
+                                     static_cast<size_t>(wall_begin_[i + 1] - wall_begin_[i]));
+    predictor_.predictNear(pose, obstacles_[i], legs, walls, outcomes_[i]);
     size_t c = 0;
     for (; c < rep.size(); ++c)
       if (sameOutcome(outcomes_[rep[c]], outcomes_[i], io_.prediction.resolution)) break;
     if (c == rep.size()) rep.push_back(i);
     ++cls_count_[c];
+    cls_of_[i] = static_cast<int>(c);
   }
   double h = 0.0;
   for (size_t c = 0; c < rep.size(); ++c) {
@@ -79,30 +137,58 @@ double InfogainPolicy::sampleBits(const Pose2& pose) {
   return h;
 }
 
+void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
+  // Rays from the centre around the whole circle, half a cell apart at the whiskers' tips, each
+  // marched outward half a cell at a time from the rim to the tip and stopped by the first
+  // occupied cell (a whisker stops there): the unknown cells each ray would sweep. The default
+  // whiskers point radially outward from the rim, so a whisker turned to angle a sweeps ray a.
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  for (const WhiskerMount& m : predictor_.mounts()) {
+    rmin = std::min(rmin, m.base.norm());
+    rmax = std::max(rmax, (m.base + m.length * m.direction()).norm());
+  }
+  const double step = 0.5 * k.cell();
+  n_rays_ = std::max(8, static_cast<int>(std::ceil(2.0 * kPi * rmax / step)));
+  const int nr = std::max(1, static_cast<int>(std::ceil((rmax - rmin) / step)));
+  ray_begin_.assign(static_cast<size_t>(n_rays_) + 1, 0);
+  ray_cells_.clear();
+  ray_radius_.clear();
+  for (int j = 0; j < n_rays_; ++j) {
+    ray_begin_[static_cast<size_t>(j)] = static_cast<int>(ray_cells_.size());
+    const double a = 2.0 * kPi * j / n_rays_;
+    const Vec2 dir{std::cos(a), std::sin(a)};
+    for (int r = 0; r <= nr; ++r) {
+      const double rad = rmin + (rmax - rmin) * r / nr;
+      int ix, iy;
+      if (!k.index(position + rad * dir, ix, iy)) break;
+      const KnownSpace::Cell c = k.at(ix, iy);
+      if (c == KnownSpace::Cell::kOccupied) break;
+      if (c != KnownSpace::Cell::kUnknown) continue;
+      ray_cells_.push_back(iy * k.nx() + ix);
+      ray_radius_.push_back(rad);
+    }
+  }
+  ray_begin_[static_cast<size_t>(n_rays_)] = static_cast<int>(ray_cells_.size());
+}
+
 double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose) {
-  const KnownSpace& k = state.known;
-  const double cell = k.cell();
+  // Requires march(state.known, pose.position()).
+  const double cell = state.known.cell();
   ++stamp_now_;
   int unknown = 0;
   const double amp = io_.prediction.amplitude;
+  const double per_ray = 2.0 * kPi / n_rays_;
   for (const WhiskerMount& m : predictor_.mounts()) {
-    const double tip = (m.base + m.length * m.direction()).norm();
-    // Angular step: half a cell at the tip; radial step half a cell.
-    const int na = std::max(1, static_cast<int>(std::ceil(2.0 * amp * tip / (0.5 * cell))));
-    const int nr = std::max(1, static_cast<int>(std::ceil(m.length / (0.5 * cell))));
-    for (int a = 0; a <= na; ++a) {
-      const double off = -amp + 2.0 * amp * a / na;
-      const Pose2 at{pose.x, pose.y, pose.theta + off};
-      const Vec2 base = at.toWorld(m.base);
-      const double h = at.theta + m.bearing;
-      const Vec2 dir{std::cos(h), std::sin(h)};
-      for (int r = 0; r <= nr; ++r) {
-        int ix, iy;
-        if (!k.index(base + (m.length * r / nr) * dir, ix, iy)) break;
-        const KnownSpace::Cell c = k.at(ix, iy);
-        if (c == KnownSpace::Cell::kOccupied) break;  // the whisker stops at a known obstacle
-        if (c != KnownSpace::Cell::kUnknown) continue;
-        int& s = stamp_[static_cast<size_t>(iy * k.nx() + ix)];
+    const double r0 = m.base.norm() - 1e-9, r1 = (m.base + m.length * m.direction()).norm() + 1e-9;
+    const double a = pose.theta + m.bearing;
+    const int j0 = static_cast<int>(std::ceil((a - amp) / per_ray));
+    const int j1 = static_cast<int>(std::floor((a + amp) / per_ray));
+    for (int jj = j0; jj <= j1; ++jj) {
+      const int j = ((jj % n_rays_) + n_rays_) % n_rays_;
+      for (int q = ray_begin_[static_cast<size_t>(j)]; q < ray_begin_[static_cast<size_t>(j) + 1]; ++q) {
+        const double rad = ray_radius_[static_cast<size_t>(q)];
+        if (rad < r0 || rad > r1) continue;
+        int& s = stamp_[static_cast<size_t>(ray_cells_[static_cast<size_t>(q)])];
         if (s == stamp_now_) continue;
         s = stamp_now_;
         ++unknown;
@@ -119,6 +205,8 @@ CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pos
   v.pose = pose;
   v.travel_m = state.travel.to(pose.position());
   if (!std::isfinite(v.travel_m) || whiskedBefore(pose)) return v;
+  gather(pose.position());
+  march(state.known, pose.position());
   v.sample_bits = sampleBits(pose);
   v.unknown_bits = unknownBits(state, pose);
   v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
@@ -163,10 +251,38 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
                                [&](const Pose2& a, const Pose2& b) { return key(a) == key(b); }),
                    candidates.end());
 
+  // Nearest first; a candidate is worth at most log2(draws) bits from the draws and 1 bit
+  // (a Bernoulli) from unswept space, so once that bound over the travel falls below the best
+  // score no farther candidate can win (exact branch and bound; the lattice's headings of one
+  // position stay together, the sort being stable).
+  std::vector<double> travel(candidates.size());
+  for (size_t i = 0; i < candidates.size(); ++i) travel[i] = state.travel.to(candidates[i].position());
+  std::vector<size_t> order(candidates.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return travel[a] < travel[b]; });
+  const double max_bits =
+      (obstacles_.size() > 1 ? std::log2(static_cast<double>(obstacles_.size())) : 0.0) + 1.0;
   Decision d;
   int best = -1;
-  for (const Pose2& c : candidates) {
-    values_.push_back(value(state, c));
+  Vec2 gathered{std::numeric_limits<double>::quiet_NaN(), 0.0};
+  for (const size_t ci : order) {
+    const Pose2& c = candidates[ci];
+    if (best >= 0 && max_bits / (travel[ci] + io_.whisk_cost_m) <= values_[static_cast<size_t>(best)].score)
+      break;
+    CandidateValue v;
+    v.pose = c;
+    v.travel_m = travel[ci];
+    if (std::isfinite(v.travel_m) && !whiskedBefore(c)) {
+      if (!(c.position() == gathered)) {  // the lattice's headings share a position
+        gather(c.position());
+        march(state.known, c.position());
+        gathered = c.position();
+      }
+      v.sample_bits = sampleBits(c);
+      v.unknown_bits = unknownBits(state, c);
+      v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
+    }
+    values_.push_back(v);
     if (best < 0 || values_.back().score > values_[static_cast<size_t>(best)].score)
       best = static_cast<int>(values_.size()) - 1;
   }

@@ -26,6 +26,40 @@ void WhiskObstacles::assign(const MapSample& sample, std::span<const MapWall> fi
     for (const OrientedRect& r : legSquares(t)) legs.push_back(r);
   walls.assign(sample.walls.begin(), sample.walls.end());
   walls.insert(walls.end(), fixed.begin(), fixed.end());
+  prepare();
+}
+
+namespace {
+LegFrame frameOf(const OrientedRect& r) {
+  return {r.pose.position(), std::cos(r.pose.theta), std::sin(r.pose.theta), 0.5 * r.size_x,
+          0.5 * r.size_y, r.circumradius()};
+}
+
+// rayRect on a prepared square.
+double rayFrame(const Vec2& origin, const Vec2& dir, double length, const LegFrame& f) {
+  const double dx = origin.x() - f.centre.x(), dy = origin.y() - f.centre.y();
+  const double o[2] = {f.c * dx + f.s * dy, -f.s * dx + f.c * dy};
+  const double d[2] = {f.c * dir.x() + f.s * dir.y(), -f.s * dir.x() + f.c * dir.y()};
+  const double h[2] = {f.hx, f.hy};
+  double t0 = 0.0, t1 = length;
+  for (int k = 0; k < 2; ++k) {
+    if (std::abs(d[k]) < 1e-12) {
+      if (o[k] < -h[k] || o[k] > h[k]) return -1.0;
+      continue;
+    }
+    double ta = (-h[k] - o[k]) / d[k], tb = (h[k] - o[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return -1.0;
+  }
+  return t0;
+}
+}  // namespace
+
+void WhiskObstacles::prepare() {
+  frames.clear();
+  for (const OrientedRect& r : legs) frames.push_back(frameOf(r));
 }
 
 double rayRect(const Vec2& origin, const Vec2& dir, double length, const OrientedRect& r) {
@@ -71,6 +105,34 @@ WhiskPredictor::WhiskPredictor(std::vector<WhiskerMount> mounts, WhiskPrediction
   for (int k = 1; k <= n; ++k) offsets_.push_back(amp * k / n);
   for (int k = 1; k <= n; ++k) offsets_.push_back(-amp * k / n);
   for (const WhiskerMount& m : mounts_) reach_ = std::max(reach_, (m.base + m.length * m.direction()).norm());
+  for (const WhiskerMount& m : mounts_) {
+    // Largest angle between the whisker's direction and the line from the centre to a point of
+    // it (0 for a radial whisker, the default array's), plus a margin for rounding.
+    const double a0 = m.base.norm() > 1e-9 ? std::abs(wrapPi(std::atan2(m.base.y(), m.base.x()) - m.bearing)) : 0.0;
+    const Vec2 tip = m.base + m.length * m.direction();
+    const double a1 = std::abs(wrapPi(std::atan2(tip.y(), tip.x()) - m.bearing));
+    spread_.push_back(std::max(a0, a1) + 1e-6);
+  }
+  for (const double o : offsets_) {
+    const Pose2 turned{0.0, 0.0, o};
+    for (const WhiskerMount& m : mounts_) {
+      base_.push_back(turned.toWorld(m.base));
+      dir_.push_back({std::cos(o + m.bearing), std::sin(o + m.bearing)});
+    }
+  }
+}
+
+void WhiskPredictor::nearReach(const Vec2& c, const WhiskObstacles& obs, std::vector<int>& legs,
+                               std::vector<int>& walls) const {
+  const bool prepared = obs.frames.size() == obs.legs.size();
+  for (size_t i = 0; i < obs.legs.size(); ++i) {
+    const OrientedRect& r = obs.legs[i];
+    const double lim = reach_ + (prepared ? obs.frames[i].radius : r.circumradius());
+    if ((r.pose.position() - c).squaredNorm() <= lim * lim) legs.push_back(static_cast<int>(i));
+  }
+  for (size_t i = 0; i < obs.walls.size(); ++i)
+    if (distanceToSegment(c, obs.walls[i].a, obs.walls[i].b) <= reach_)
+      walls.push_back(static_cast<int>(i));
 }
 
 bool WhiskPredictor::anyInReach(const Vec2& position, const WhiskObstacles& obs) const {
@@ -83,39 +145,70 @@ bool WhiskPredictor::anyInReach(const Vec2& position, const WhiskObstacles& obs)
 
 void WhiskPredictor::predict(const Pose2& pose, const WhiskObstacles& obs,
                              std::vector<WhiskerContact>& out) {
-  out.assign(mounts_.size(), WhiskerContact{});
   near_legs_.clear();
   near_walls_.clear();
-  const Vec2 c = pose.position();
-  for (size_t i = 0; i < obs.legs.size(); ++i) {
-    const OrientedRect& r = obs.legs[i];
-    if ((r.pose.position() - c).norm() <= reach_ + r.circumradius())
-      near_legs_.push_back(static_cast<int>(i));
-  }
-  for (size_t i = 0; i < obs.walls.size(); ++i)
-    if (distanceToSegment(c, obs.walls[i].a, obs.walls[i].b) <= reach_)
-      near_walls_.push_back(static_cast<int>(i));
-  if (near_legs_.empty() && near_walls_.empty()) return;
+  nearReach(pose.position(), obs, near_legs_, near_walls_);
+  predictNear(pose, obs, near_legs_, near_walls_, out);
+}
+
+void WhiskPredictor::predictNear(const Pose2& pose, const WhiskObstacles& obs,
+                                 std::span<const int> legs, std::span<const int> walls,
+                                 std::vector<WhiskerContact>& out) {
+  out.assign(mounts_.size(), WhiskerContact{});
+  if (legs.empty() && walls.empty()) return;
+  const bool prepared = obs.frames.size() == obs.legs.size();
   const int n_legs = static_cast<int>(obs.legs.size());
-  for (const double offset : offsets_) {
-    const Pose2 at{pose.x, pose.y, pose.theta + offset};
-    for (size_t w = 0; w < mounts_.size(); ++w) {
-      const WhiskerMount& m = mounts_[w];
-      const Vec2 base = at.toWorld(m.base);
-      const double heading = at.theta + m.bearing;
-      const Vec2 dir{std::cos(heading), std::sin(heading)};
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  const Vec2 at = pose.position();
+  const size_t nm = mounts_.size();
+  // Angular screen: a leg at bearing phi from the centre, distance r, half-diagonal rho, can
+  // meet a whisker only while the whisker's direction is within asin(rho / r) plus the
+  // whisker's own angular spread (base off the radial line) of phi. Walls are not screened.
+  leg_phi_.clear();
+  leg_halfwidth_.clear();
+  for (const int i : legs) {
+    const size_t j = static_cast<size_t>(i);
+    const Vec2 d = obs.legs[j].pose.position() - at;
+    const double r = d.norm();
+    const double rho = prepared ? obs.frames[j].radius : obs.legs[j].circumradius();
+    leg_phi_.push_back(std::atan2(d.y(), d.x()));
+    leg_halfwidth_.push_back(r <= rho ? kPi : std::asin(rho / r));
+  }
+  const double amp = options_.amplitude;
+  for (size_t w = 0; w < nm; ++w) {
+    const double length = mounts_[w].length;
+    WhiskerContact& o = out[w];
+    // The legs this whisker can meet during the sweep, and the offset window for each.
+    rel_.clear();
+    for (size_t q = 0; q < legs.size(); ++q) {
+      const double delta = wrapPi(leg_phi_[q] - pose.theta - mounts_[w].bearing);
+      const double half = leg_halfwidth_[q] + spread_[w];
+      if (std::abs(delta) <= amp + half) rel_.push_back({q, delta - half, delta + half});
+    }
+    if (rel_.empty() && walls.empty()) continue;
+    for (size_t k = 0; k < offsets_.size(); ++k) {
+      const double off = offsets_[k];
+      bool any = !walls.empty();
+      for (const Window& r : rel_) any = any || (off >= r.lo && off <= r.hi);
+      if (!any) continue;
+      const Vec2& lb = base_[k * nm + w];
+      const Vec2& ld = dir_[k * nm + w];
+      const Vec2 base{at.x() + c * lb.x() - s * lb.y(), at.y() + s * lb.x() + c * lb.y()};
+      const Vec2 dir{c * ld.x() - s * ld.y(), s * ld.x() + c * ld.y()};
       double best = std::numeric_limits<double>::infinity();
       int object = -1;
-      for (const int i : near_legs_) {
-        const double t = rayRect(base, dir, m.length, obs.legs[static_cast<size_t>(i)]);
-        if (t >= 0.0 && t < best) best = t, object = i;
+      for (const Window& r : rel_) {
+        if (off < r.lo || off > r.hi) continue;
+        const size_t j = static_cast<size_t>(legs[r.q]);
+        const double t = prepared ? rayFrame(base, dir, length, obs.frames[j])
+                                  : rayRect(base, dir, length, obs.legs[j]);
+        if (t >= 0.0 && t < best) best = t, object = legs[r.q];
       }
-      for (const int i : near_walls_) {
+      for (const int i : walls) {
         const MapWall& wall = obs.walls[static_cast<size_t>(i)];
-        const double t = raySegment(base, dir, m.length, wall.a, wall.b);
+        const double t = raySegment(base, dir, length, wall.a, wall.b);
         if (t >= 0.0 && t < best) best = t, object = n_legs + i;
       }
-      WhiskerContact& o = out[w];
       // Strictly smaller: on a tie the earlier sample of the whisk wins (as RaySensorModel).
       if (object >= 0 && (!o.hit || best < o.distance)) {
         o.hit = true;

@@ -44,8 +44,8 @@ namespace crunch::exploration {
 
 struct InfogainOptions {
   // Metres of driving that one whisk's 8 s are worth: the time at the explore loop's cruise
-  // speed (0.1 m/s, BodyWhisk's forward_speed).
-  double whisk_cost_m = 0.8;
+  // speed (0.2 m/s, the Create's, session/explore_loop.h).
+  double whisk_cost_m = 1.6;
   // Distance from the robot's centre at which a leg-aimed candidate puts the leg: the middle of
   // the whiskers' span (rim 0.165 m .. tip 0.305 m).
   double aim_distance = 0.235;
@@ -79,7 +79,13 @@ class InfogainPolicy final : public ExplorePolicy {
 
  private:
   void prepare(const ExploreState& state);
+  // The draws' objects within reach of `position` (flat lists, per-draw ranges) and which
+  // draws share them; sampleBits(pose) needs gather(pose.position()) first.
+  void gather(const Vec2& position);
   double sampleBits(const Pose2& pose);
+  // The unknown cells each ray from `position` would sweep; unknownBits(pose) needs
+  // march(known, pose.position()) first.
+  void march(const KnownSpace& known, const Vec2& position);
   double unknownBits(const ExploreState& state, const Pose2& pose);
   bool whiskedBefore(const Pose2& pose) const;
 
@@ -90,6 +96,12 @@ class InfogainPolicy final : public ExplorePolicy {
   std::vector<std::vector<WhiskerContact>> outcomes_;  // one per draw, scratch
   std::vector<int> cls_count_;
   std::vector<size_t> rep_scratch_;
+  std::vector<int> cls_of_;
+  std::vector<int> near_legs_, near_walls_, leg_begin_, wall_begin_, uniq_;
+  bool any_near_ = false;
+  int n_rays_ = 8;
+  std::vector<int> ray_begin_, ray_cells_;
+  std::vector<double> ray_radius_;
   std::vector<int> stamp_;
   int stamp_now_ = 0;
   double lambda_ = 1.0;

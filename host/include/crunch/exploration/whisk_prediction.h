@@ -54,14 +54,26 @@ struct WhiskerContact {
   int object = -1;            // index into the predictor's object list (hit only)
 };
 
+// A leg square prepared for ray tests (its rotation's cosine and sine computed once).
+struct LegFrame {
+  Vec2 centre = Vec2::Zero();
+  double c = 1.0, s = 0.0;  // cos, sin of the square's angle
+  double hx = 0.0, hy = 0.0;
+  double radius = 0.0;      // half-diagonal
+};
+
 // The objects a whisk can touch, in arena frame.
 struct WhiskObstacles {
   std::vector<OrientedRect> legs;
   std::vector<MapWall> walls;
+  std::vector<LegFrame> frames;  // legs prepared (prepare(); assign() calls it)
   void clear() {
     legs.clear();
     walls.clear();
+    frames.clear();
   }
+  // Fills `frames` from `legs`. predict() prepares on the fly (slower) when they differ in size.
+  void prepare();
   // The four leg squares of every table of `sample` and its walls; `fixed` walls (e.g. the
   // arena's boundary) appended.
   void assign(const MapSample& sample, std::span<const MapWall> fixed = {});
@@ -77,6 +89,14 @@ class WhiskPredictor {
   // One contact per mount, in mount order, into `out` (resized to the mount count).
   void predict(const Pose2& pose, const WhiskObstacles& obstacles,
                std::vector<WhiskerContact>& out);
+  // The same against only the listed legs and walls of `obstacles` (indices; e.g. those
+  // nearReach() found for the position); identical to predict() when the lists hold every
+  // object within reach.
+  void predictNear(const Pose2& pose, const WhiskObstacles& obstacles, std::span<const int> legs,
+                   std::span<const int> walls, std::vector<WhiskerContact>& out);
+  // Appends the indices of the legs and walls within reach of `position`.
+  void nearReach(const Vec2& position, const WhiskObstacles& obstacles, std::vector<int>& legs,
+                 std::vector<int>& walls) const;
   // Whether anything of `obstacles` is within the whisk's reach of `position` (the body's
   // radius plus the longest whisker's tip, plus the object's own half-diagonal).
   bool anyInReach(const Vec2& position, const WhiskObstacles& obstacles) const;
@@ -94,6 +114,16 @@ class WhiskPredictor {
   std::vector<double> offsets_;
   double reach_ = 0.0;
   std::vector<int> near_legs_, near_walls_;  // scratch: objects within reach
+  // Per sweep offset k and mount w (index k * mounts + w), in the robot frame at heading 0:
+  // the whisker's base and unit direction after turning by offset k.
+  std::vector<Vec2> base_, dir_;
+  std::vector<double> spread_;  // per mount: angular spread of the whisker seen from the centre
+  std::vector<double> leg_phi_, leg_halfwidth_;  // scratch: the angular screen
+  struct Window {
+    size_t q;       // index into the near-leg list
+    double lo, hi;  // sweep offsets at which the whisker can meet it
+  };
+  std::vector<Window> rel_;
 };
 
 // Same outcome at the sensor's resolution: the same whiskers touch, each contact pair within
