@@ -137,6 +137,24 @@ double InfogainPolicy::sampleBits(const Pose2& pose) {
   return h;
 }
 
+double InfogainPolicy::positionBound(double cell) const {
+  // The draws' outcome classes are unions of the groups of draws with identical objects in
+  // reach, so H(Y) is at most the entropy of those groups' sizes; the unswept area one heading
+  // sweeps is at most the whole ring's, and H_b grows up to p = 1/2.
+  double h = 0.0;
+  if (any_near_) {
+    const size_t n = uniq_.size();
+    std::vector<int>& count = bound_scratch_;
+    count.assign(n, 0);
+    for (const int u : uniq_) ++count[static_cast<size_t>(u)];
+    for (const int k : count)
+      if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
+  }
+  const double area = static_cast<double>(ray_cells_.size()) * cell * cell;
+  const double p = std::min(0.5, 1.0 - std::exp(-lambda_ * area));
+  return h + binaryEntropyBits(p) + 1e-12;
+}
+
 void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
   // Rays from the centre around the whole circle, half a cell apart at the whiskers' tips, each
   // marched outward half a cell at a time from the rim to the tip and stopped by the first
@@ -265,6 +283,7 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
   Decision d;
   int best = -1;
   Vec2 gathered{std::numeric_limits<double>::quiet_NaN(), 0.0};
+  double position_bound = max_bits;
   for (const size_t ci : order) {
     const Pose2& c = candidates[ci];
     if (best >= 0 && max_bits / (travel[ci] + io_.whisk_cost_m) <= values_[static_cast<size_t>(best)].score)
@@ -277,6 +296,13 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
         gather(c.position());
         march(state.known, c.position());
         gathered = c.position();
+        position_bound = positionBound(state.known.cell());
+      }
+      // No heading here can beat the best: skip the predictions (exact, see positionBound).
+      if (best >= 0 && position_bound / (v.travel_m + io_.whisk_cost_m) <=
+                           values_[static_cast<size_t>(best)].score) {
+        values_.push_back(v);
+        continue;
       }
       v.sample_bits = sampleBits(c);
       v.unknown_bits = unknownBits(state, c);

@@ -86,6 +86,8 @@ class InfogainPolicy final : public ExplorePolicy {
   // The unknown cells each ray from `position` would sweep; unknownBits(pose) needs
   // march(known, pose.position()) first.
   void march(const KnownSpace& known, const Vec2& position);
+  // An upper bound on any heading's bits at the gathered and marched position.
+  double positionBound(double cell) const;
   double unknownBits(const ExploreState& state, const Pose2& pose);
   bool whiskedBefore(const Pose2& pose) const;
 
@@ -102,6 +104,7 @@ class InfogainPolicy final : public ExplorePolicy {
   int n_rays_ = 8;
   std::vector<int> ray_begin_, ray_cells_;
   std::vector<double> ray_radius_;
+  mutable std::vector<int> bound_scratch_;
   std::vector<int> stamp_;
   int stamp_now_ = 0;
   double lambda_ = 1.0;
