@@ -136,3 +136,31 @@ TEST_CASE("Infogain: unswept space is worth the Poisson prior's bits, and the ch
   a.next(again, r1);
   CHECK(a.value(again, *da.goal).score == 0.0);
 }
+
+TEST_CASE("Infogain: the region's edges are known walls; draws disagreeing only on how far a "
+          "wall runs along an edge carry no information", "[exploration][infogain]") {
+  World w;
+  w.known.markBody({1.5, 1.5}, 5.0);
+  // Half the draws extend the wall along the edge y = 0 (placed 2 cm in, as noisy contacts put
+  // it) to x = 1.0, half only to x = 0.5.
+  for (int i = 0; i < 16; ++i) {
+    MapSample s;
+    s.walls.push_back({{0.0, 0.02}, {i % 2 ? 1.0 : 0.5, 0.02}, 1.0});
+    w.samples.push_back(s);
+  }
+  State s(w, {1.5, 1.5, 0.0});
+  InfogainPolicy policy(PolicyOptions{});
+  // Facing the edge at x = 0.75, where the draws' walls differ: the edge is there in all.
+  CHECK(policy.value(s.state, {0.75, 0.25, -kPi / 2}).sample_bits == 0.0);
+  // The same disagreement about an interior wall (y = 1.0) is worth a bit.
+  World v;
+  v.known.markBody({1.5, 1.5}, 5.0);
+  for (int i = 0; i < 16; ++i) {
+    MapSample m;
+    m.walls.push_back({{0.3, 1.0}, {i % 2 ? 1.0 : 0.5, 1.0}, 1.0});
+    v.samples.push_back(m);
+  }
+  State t(v, {1.5, 1.5, 0.0});
+  InfogainPolicy p2(PolicyOptions{});
+  CHECK(p2.value(t.state, {0.75, 1.25, -kPi / 2}).sample_bits == Approx(1.0));
+}

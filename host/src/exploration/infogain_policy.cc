@@ -37,8 +37,28 @@ void InfogainPolicy::prepare(const ExploreState& state) {
   obstacles_.resize(state.samples.size());
   outcomes_.resize(state.samples.size());
   double legs = 0.0;
+  // The region's edges are walls the robot knows (outside the region counts as blocked): they
+  // stop every draw's whiskers alike, and a draw's wall lying along one (both ends within
+  // 2 resolutions of the edge's line) is that edge, not news - so it is replaced by the edge,
+  // and disagreement about how far along the edge the blackboard has extended it carries no
+  // information about the map.
+  const Vec2 lo = state.known.lo(), hi = state.known.hi();
+  const MapWall edges[4] = {{lo, {hi.x(), lo.y()}, 1.0},
+                            {{hi.x(), lo.y()}, hi, 1.0},
+                            {hi, {lo.x(), hi.y()}, 1.0},
+                            {{lo.x(), hi.y()}, lo, 1.0}};
+  const double tol = 2.0 * io_.prediction.resolution;
+  auto alongEdge = [&](const MapWall& w) {
+    const bool x0 = std::abs(w.a.x() - lo.x()) < tol && std::abs(w.b.x() - lo.x()) < tol;
+    const bool x1 = std::abs(w.a.x() - hi.x()) < tol && std::abs(w.b.x() - hi.x()) < tol;
+    const bool y0 = std::abs(w.a.y() - lo.y()) < tol && std::abs(w.b.y() - lo.y()) < tol;
+    const bool y1 = std::abs(w.a.y() - hi.y()) < tol && std::abs(w.b.y() - hi.y()) < tol;
+    return x0 || x1 || y0 || y1;
+  };
   for (size_t i = 0; i < state.samples.size(); ++i) {
-    obstacles_[i].assign(state.samples[i]);
+    obstacles_[i].assign(state.samples[i], edges);
+    std::vector<MapWall>& walls = obstacles_[i].walls;
+    walls.erase(std::remove_if(walls.begin(), walls.end() - 4, alongEdge), walls.end() - 4);
     legs += static_cast<double>(obstacles_[i].legs.size());
   }
   if (!state.samples.empty()) legs /= static_cast<double>(state.samples.size());
