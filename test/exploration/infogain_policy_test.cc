@@ -151,7 +151,9 @@ TEST_CASE("Infogain: the region's edges are known walls; draws disagreeing only 
   State s(w, {1.5, 1.5, 0.0});
   InfogainPolicy policy(PolicyOptions{});
   // Facing the edge at x = 0.75, where the draws' walls differ: the edge is there in all.
-  CHECK(policy.value(s.state, {0.75, 0.25, -kPi / 2}).sample_bits == 0.0);
+  const CandidateValue edge = policy.value(s.state, {0.75, 0.25, -kPi / 2});
+  REQUIRE(edge.travel_m < 1e9);  // reachable: a real score, not the unreachable 0
+  CHECK(edge.sample_bits == 0.0);
   // The same disagreement about an interior wall (y = 1.0) is worth a bit.
   World v;
   v.known.markBody({1.5, 1.5}, 5.0);
