@@ -125,10 +125,14 @@ TEST_CASE("Infogain: unswept space is worth the Poisson prior's bits, and the ch
   CHECK(v.sample_bits == 0.0);
   // lambda = (1 prior leg + 0) / (1 m^2 + swept area): below 1 leg per m^2. The whiskers'
   // band (0.165..0.305 m over 97.5 degrees, 0.056 m^2) touches at most 45 cells of 5 cm
-  // (0.11 m^2, cells counted whole), so p = 1 - exp(-lambda A) < 0.11: at most H_b(0.11) bits.
+  // (0.11 m^2, cells counted whole), so p = 1 - exp(-lambda A) < 0.11; the outcome is no touch
+  // or a touch at one of A / (15 mm)^2 places: H_b(p) + p log2(A / 0.015^2) bits at most.
   CHECK(a.legDensity() < 1.0);
   CHECK(v.unknown_bits > 0.05);
-  CHECK(v.unknown_bits < binaryEntropyBits(0.11));
+  CHECK(v.unknown_bits < unknownOutcomeBits(1.0, 0.11, 0.015));
+  CHECK(unknownOutcomeBits(1.0, 0.11, 0.015) ==
+        Approx(binaryEntropyBits(1 - std::exp(-0.11)) +
+               (1 - std::exp(-0.11)) * std::log2(0.11 / (0.015 * 0.015))));
   // The same pose again (the robot whisked there) is worth nothing.
   ExploreState again = s.state;
   again.robot = *da.goal;

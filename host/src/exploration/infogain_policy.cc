@@ -12,6 +12,15 @@ double binaryEntropyBits(double p) {
   return -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
 }
 
+double unknownOutcomeBits(double lambda, double area, double resolution) {
+  // Nothing (1 - p), or a first touch at one of K = A / resolution^2 places equally likely
+  // (p / K each): H = H_b(p) + p log2 K. Monotone in A while p <= 1/2; beyond, capped there
+  // (an upper bound suffices for the branch and bound, and p > 1/2 needs > 0.7 / lambda m^2).
+  const double p = std::min(0.5, 1.0 - std::exp(-lambda * area));
+  const double k = std::max(1.0, area / (resolution * resolution));
+  return binaryEntropyBits(p) + p * std::log2(k);
+}
+
 InfogainPolicy::InfogainPolicy(const PolicyOptions& options, const InfogainOptions& infogain)
     : options_(options), io_(infogain), predictor_(defaultWhiskerArray(), infogain.prediction) {}
 
@@ -170,9 +179,9 @@ double InfogainPolicy::positionBound(double cell) const {
     for (const int k : count)
       if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
   }
+  // unknownOutcomeBits grows with the area.
   const double area = static_cast<double>(ray_cells_.size()) * cell * cell;
-  const double p = std::min(0.5, 1.0 - std::exp(-lambda_ * area));
-  return h + binaryEntropyBits(p) + 1e-12;
+  return h + unknownOutcomeBits(lambda_, area, io_.prediction.resolution) + 1e-12;
 }
 
 void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
@@ -234,7 +243,7 @@ double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose)
     }
   }
   const double area = unknown * cell * cell;
-  return binaryEntropyBits(1.0 - std::exp(-lambda_ * area));
+  return unknownOutcomeBits(lambda_, area, io_.prediction.resolution);
 }
 
 CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pose) {

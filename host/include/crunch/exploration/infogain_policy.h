@@ -114,5 +114,8 @@ class InfogainPolicy final : public ExplorePolicy {
 
 // H_b(p) in bits.
 double binaryEntropyBits(double p);
+// The entropy of a whisk's outcome over `area` m^2 of unswept space with legs a Poisson process
+// of density `lambda`: no touch, or a first touch at one of area / resolution^2 places.
+double unknownOutcomeBits(double lambda, double area, double resolution);
 
 }  // namespace crunch::exploration
