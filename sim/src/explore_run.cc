@@ -171,7 +171,23 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
               whisks_now = loop_ptr->report().whisks - 1;  // the loop counted this one already
               whisked(pose);
             },
-        .samples = samples};
+        .samples = samples,
+        // The simulator stands in for a bumper that knows where it was pressed: the nearest
+        // point of any wall or leg to the body (the Create's own bumpers tell left from right
+        // only; docs/EXPLORATION.md).
+        .bump_point = [&](const Pose2& pose) -> std::optional<Vec2> {
+          auto lock = lockWorld(world_mutex);
+          std::optional<Vec2> best;
+          double best_d = std::numeric_limits<double>::infinity();
+          for (const OrientedRect& r : scene.world->footprints()) {
+            const PerimeterPoint q = closestOnPerimeter(r, pose.position());
+            if (q.distance < best_d) {
+              best_d = q.distance;
+              best = q.point;
+            }
+          }
+          return best;
+        }};
     session::ExploreLoop loop(base, known, *policy, mounts, mopt.model, scene.poses, lo_opts,
                               std::move(hooks));
     loop_ptr = &loop;

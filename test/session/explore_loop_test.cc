@@ -58,7 +58,7 @@ TEST_CASE("ExploreLoop: drives to the goal, turns to its heading and whisks ther
   ListPolicy policy({{3.0, 2.2, kPi / 2}});
   std::vector<Pose2> whisked;
   ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
-                   ExploreLoop::Options{}, {.whisked = [&](const Pose2& p) { whisked.push_back(p); }, .samples = {}});
+                   ExploreLoop::Options{}, {.whisked = [&](const Pose2& p) { whisked.push_back(p); }, .samples = {}, .bump_point = {}});
   run(loop, base, 200.0);
   REQUIRE(loop.finished());
   CHECK(loop.report().stop_reason == "list done");
@@ -88,7 +88,7 @@ TEST_CASE("ExploreLoop: a bump on an unknown leg is recorded and the path replan
   ListPolicy policy({{3.5, 1.5, 0.0}});
   int whisks = 0;
   ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
-                   ExploreLoop::Options{}, {.whisked = [&](const Pose2&) { ++whisks; }, .samples = {}});
+                   ExploreLoop::Options{}, {.whisked = [&](const Pose2&) { ++whisks; }, .samples = {}, .bump_point = {}});
   run(loop, base, 400.0);
   REQUIRE(loop.finished());
   CHECK(loop.report().bumps >= 1);
@@ -113,4 +113,24 @@ TEST_CASE("ExploreLoop: the whisk budget ends the run and says so", "[session]")
   REQUIRE(loop.finished());
   CHECK(loop.report().whisks == 2);
   CHECK(loop.report().stop_reason == "whisk budget reached");
+}
+
+TEST_CASE("ExploreLoop: a robot boxed in ends the run cleanly and says why", "[session]") {
+  const Scene scene = room();
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {2.0, 1.5, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  // A ring of contacts 0.15 m around the robot: no cell it can reach is one it may stand on.
+  for (int i = 0; i < 120; ++i) {
+    const double a = 2 * kPi * i / 120;
+    known.markContact(Vec2(2.0, 1.5) + 0.15 * Vec2(std::cos(a), std::sin(a)));
+  }
+  auto policy = exploration::makeRandomPolicy(exploration::PolicyOptions{});
+  ExploreLoop loop(base, known, *policy, defaultWhiskerArray(), ModelParams{}, {},
+                   ExploreLoop::Options{}, {});
+  run(loop, base, 10.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason.find("boxed in") != std::string::npos);
+  CHECK(loop.report().whisks == 0);
+  CHECK(loop.report().travel_m == 0.0);
 }

@@ -30,7 +30,7 @@ struct Node {
 
 // A* (heuristic on) or Dijkstra (off) from `from` over the costmap. Moves from a free cell into
 // a blocked one are not allowed; moves out of a blocked cell are (a start inside an inflated
-// obstacle leaves it by the cheapest way). Fills dist and parent; returns the start index or -1.
+// obstacle leaves it by the cheapest way), but never into an occupied cell. Fills dist and parent; returns the start index or -1.
 int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& dist,
            std::vector<int>& parent) {
   const KnownSpace& k = cm.known();
@@ -62,6 +62,8 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
       if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
       const bool there_blocked = cm.blocked(jx, jy);
       if (there_blocked && !here_blocked) continue;
+      // Leaving an inflated zone never goes through the obstacle itself.
+      if (k.at(jx, jy) == KnownSpace::Cell::kOccupied) continue;
       // No corner cutting: a diagonal step needs both side cells passable.
       if (d >= 4 && !here_blocked && (cm.blocked(x + kDx[d], y) || cm.blocked(x, y + kDy[d]))) continue;
       const int j = jy * nx + jx;

@@ -301,8 +301,10 @@ std::vector<Vec2> uniquePositions(const std::vector<Pose2>& poses) {
 
 // Robot positions, like the paper's Fig. 6: the scene's planned poses in grey, and in black the
 // poses whose contacts were inferred from (map.per_pose).
-void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth) {
-  for (const Vec2& pos : uniquePositions(truth.poses)) p.dotPath(pos, kPoseDotRadius);
+void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth, bool planned) {
+  if (planned) {
+    for (const Vec2& pos : uniquePositions(truth.poses)) p.dotPath(pos, kPoseDotRadius);
+  }
   p.colour(kPlannedPoseDot);
   cairo_fill(p.cr());
   std::vector<Pose2> inferred;
@@ -411,7 +413,10 @@ void drawFusedTables(const Painter& p, const Map& map) {
 std::string titleLine(const Map& map, const Scene& truth, const RenderOptions& options) {
   std::size_t per_pose_tables = 0;
   for (const PoseMap& pm : map.per_pose) per_pose_tables += pm.tables.size();
-  const std::size_t poses = truth.poses.size();
+  // An exploration run whisked where it chose: its whisks are its poses, not the scene's list.
+  const std::size_t poses = options.exploration
+                                ? static_cast<std::size_t>(options.exploration->whisks)
+                                : truth.poses.size();
   std::string line = options.title.empty() ? std::string() : options.title + "   ";
   line += std::to_string(truth.tables.size()) + " true tables | " + std::to_string(poses) +
           " poses (" + std::to_string(map.per_pose.size()) + " with contacts) | " +
@@ -553,7 +558,8 @@ void drawPicture(cairo_t* cr, const MapCanvas& canvas, const Map& map, const Sce
   if (options.draw_per_pose) drawPerPoseTables(p, map);
   p.restore();
   drawWalls(p, truth);
-  drawPoseGrid(p, map, truth);
+  // An exploration run draws its own path and whisk poses; the scene's list is not its plan.
+  drawPoseGrid(p, map, truth, options.exploration == nullptr);
   p.clipToArena();
   if (options.draw_fused) drawFusedTables(p, map);
   // Shapelets last: they are the evidence, small, and would vanish under the fused legs.

@@ -27,6 +27,7 @@ Status ExploreLoop::Options::validate() const {
   }
   if (!positive(record_every)) return Error{"explore loop record_every: must be above 0"};
   if (max_failed_goals < 1) return Error{"explore loop max_failed_goals: must be >= 1"};
+  if (max_bumps_per_goal < 1) return Error{"explore loop max_bumps_per_goal: must be >= 1"};
   return whisk.validate();
 }
 
@@ -117,6 +118,13 @@ bool ExploreLoop::newTouch(const Vec2& p) const {
   return true;
 }
 
+int ExploreLoop::failGoal() {
+  // Goals at one position (the grid's headings) count once: boxed in means positions.
+  if (!last_failed_ || (last_failed_->position() - goal_->position()).norm() > 1e-9) ++failed_;
+  last_failed_ = goal_;
+  return failed_;
+}
+
 bool ExploreLoop::plan() {
   const exploration::Costmap costmap(known_, options_.explore.planner);
   const auto p = exploration::planPath(costmap, last_pose_.position(), goal_->position());
@@ -150,8 +158,9 @@ Status ExploreLoop::decideAndPlan() {
     return okStatus();
   }
   goal_ = d.goal;
+  goal_bumps_ = 0;
   if (!plan()) {
-    if (++failed_ >= options_.max_failed_goals) {
+    if (failGoal() >= options_.max_failed_goals) {
       finish("boxed in: " + std::to_string(failed_) + " goals in a row could not be reached");
     }
     return okStatus();
@@ -166,10 +175,14 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
   track(pose);
 
   if (base_.bumped() && (phase_ == Phase::kFollow || phase_ == Phase::kAlign)) {
-    const Vec2 hit = pose.position() + options_.explore.planner.robot_radius *
-                                           Vec2(std::cos(pose.theta), std::sin(pose.theta));
+    std::optional<Vec2> told;
+    if (hooks_.bump_point) told = hooks_.bump_point(pose);
+    const Vec2 hit = told ? *told
+                          : pose.position() + options_.explore.planner.robot_radius *
+                                                  Vec2(std::cos(pose.theta), std::sin(pose.theta));
     known_.markBump(hit);
     ++report_.bumps;
+    ++goal_bumps_;
     report_.bump_points.push_back(hit);
     backoff_from_ = pose;
     deadline_ = base_.now() + 3.0 * options_.backoff / options_.backoff_speed + 1.0;
@@ -208,8 +221,7 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
         }
       }
       if (base_.now() > deadline_) {
-        ++failed_;
-        if (failed_ >= options_.max_failed_goals) {
+        if (failGoal() >= options_.max_failed_goals) {
           finish("boxed in: " + std::to_string(failed_) + " goals in a row could not be reached");
           return okStatus();
         }
@@ -254,6 +266,7 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
       if (hooks_.whisked) hooks_.whisked(whisk_pose_);
       if (phase_ == Phase::kWhisk) {
         failed_ = 0;
+        last_failed_.reset();
         phase_ = Phase::kDecide;
         return okStatus();
       }
@@ -272,9 +285,10 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
           base_.now() > deadline_;
       if (!done) return command(-options_.backoff_speed, 0.0);
       if (auto st = command(0.0, 0.0); !st) return st;
-      if (!plan()) {
-        ++failed_;
-        if (failed_ >= options_.max_failed_goals) {
+      // A goal that keeps bumping (the bump point is only where the front of the body was; an
+      // object hit at the side stays unknown) is given up after max_bumps_per_goal.
+      if (goal_bumps_ >= options_.max_bumps_per_goal || !plan()) {
+        if (failGoal() >= options_.max_failed_goals) {
           finish("boxed in: " + std::to_string(failed_) + " goals in a row could not be reached");
           return okStatus();
         }

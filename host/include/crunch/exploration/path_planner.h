@@ -58,7 +58,7 @@ struct PathPlan {
 
 // The shortest path from `from` to `to` on the costmap, or nullopt when the goal is blocked or
 // unreachable. A start inside an inflated obstacle (after a bump) may leave it by the shortest
-// way out.
+// way out that crosses no occupied cell.
 std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const Vec2& to);
 
 // Path cost from one start to every cell (Dijkstra on the same graph as planPath).

@@ -10,9 +10,11 @@
 //   -> Hooks::whisked(pose where the whisk began): the caller senses and maps, and marks the
 //      KnownSpace (free rays, contacts, the map's obstacles)
 //   -> decide again.
-// A bump (base.bumped()) while driving or turning: stop, record the bump point (the body's front
-// on its heading, radius kRobotRadius) as occupied in the KnownSpace and in the report, back off
-// `backoff`, replan to the same goal (a new decision if it is now unreachable).
+// A bump (base.bumped()) while driving or turning: stop, record the bump point (Hooks::bump_point,
+// else the body's front on its heading, radius kRobotRadius) as occupied in the KnownSpace and in the report, back off
+// `backoff`, replan to the same goal (a new decision if it is now unreachable, or after
+// max_bumps_per_goal bumps on the way to it: the bumper says only that the front hit something,
+// so an object met at the side can bump again).
 // A whisker touching while driving (update's contact mask): if the touch is at least
 // touch_separation from every occupied cell of the KnownSpace and every touch acted on before,
 // stop and whisk in place there (new evidence, reported like any whisk), then replan to the goal;
@@ -57,7 +59,8 @@ class ExploreLoop {
     double backoff_speed = 0.05;      // m/s
     double touch_separation = 0.05;   // m: a transit touch nearer known contacts is not new
     double record_every = 0.05;       // m between the path's recorded poses
-    int max_failed_goals = 5;         // goals in a row not reached: boxed in
+    int max_failed_goals = 10;        // goal positions in a row not reached: boxed in
+    int max_bumps_per_goal = 3;       // bumps on the way to one goal: give it up, decide again
     std::uint64_t seed = 1;           // the policy's stream
     BodyWhisk::Options whisk;         // the in-place whisk
     Status validate() const;
@@ -68,6 +71,9 @@ class ExploreLoop {
     std::function<void(const Pose2& pose)> whisked;
     // n posterior draws for the policy (when it wants any); unset: none.
     std::function<void(int n, std::vector<MapSample>& out)> samples;
+    // Where the body hit, if the base can tell (the simulator knows the obstacle; the Create's
+    // bumpers say only left/right). Unset or nullopt: the body's front point on its heading.
+    std::function<std::optional<Vec2>(const Pose2& pose)> bump_point;
   };
 
   // Asserts options.validate(). Marks the body's disc at the start as free.
@@ -94,6 +100,7 @@ class ExploreLoop {
  private:
   Status decideAndPlan();
   bool plan();
+  int failGoal();  // counts the current goal as failed; returns the failures in a row
   Status command(double v, double omega);
   bool newTouch(const Vec2& p) const;
   bool budgetReached(std::string& why) const;
@@ -117,6 +124,8 @@ class ExploreLoop {
   double deadline_ = 0.0;
   Pose2 last_pose_, recorded_, whisk_pose_, backoff_from_;
   int failed_ = 0;
+  int goal_bumps_ = 0;
+  std::optional<Pose2> last_failed_;
   double decision_total_ms_ = 0.0;
   int decisions_ = 0;
   double start_time_ = 0.0;
