@@ -1,0 +1,121 @@
+// `--explore infogain` (docs/EXPLORATION.md, "Information gain and the paper's entropy"): the
+// next whisk pose is the one whose outcome tells most about the map per metre it costs.
+//
+// For a candidate whisk pose c the value is the mutual information between the whisk's outcome
+// Y and the map M, I(Y; M) = H(Y) - H(Y | M), in bits, from two sources the model knows of:
+//   * the blackboard's hypotheses: posterior draws m_1..m_N (ExploreState::samples,
+//     Mapper::drawSamples). For each draw the forward model (whisk_prediction.h) predicts what
+//     the whiskers would touch; outcomes equal at the sensor's resolution are one outcome. The
+//     draws are equally weighted, so H(Y) is the entropy of the partition of the draws by
+//     outcome, and H(Y | M) = 0: the prediction per draw is deterministic once quantised at the
+//     resolution (the noise is what the resolution already absorbs). This is Fig. 7 made exact:
+//     the unvisited legs of rival tables are exactly where the draws' predictions disagree,
+//     and a leg every draw agrees on (or empty space all agree is empty) scores nothing.
+//   * what no draw can see: space no whisker has swept (KnownSpace kUnknown) may hold an object
+//     the blackboard has no hypothesis for. Objects are a Poisson process of legs with density
+//     lambda per m^2; with A the unknown area the whiskers would sweep (marched along each
+//     whisker, stopped by occupied cells), the whisk touches something new with
+//     p = 1 - exp(-lambda A), a Bernoulli outcome carrying H_b(p) bits. lambda is the
+//     Gamma-Poisson posterior mean from a Gamma(1 leg, 1 m^2) prior and the legs the draws hold
+//     (their mean count) over the area the robot knows: lambda = (1 + legs) / (1 + known m^2).
+//     The two sources are added (independent: one concerns hypotheses, the other space that no
+//     hypothesis covers).
+// score(c) = I(Y; M) / (travel(c) + whisk_cost_m), travel from the DistanceField. The whisk
+// itself costs time (8 s: pi/12 each way at pi/24 rad/s, and back), counted as the metres the
+// base would drive in that time. A pose already whisked (within resolution-sized tolerance)
+// would repeat its outcome exactly and scores 0. Stops ("no candidate worth its travel") when
+// the best score is at most PolicyOptions::min_bits_per_metre.
+//
+// Candidates: a lattice over the costmap's free cells (candidate_spacing, candidate_headings)
+// whose travel is finite, and for every leg of every draw the poses at whisker reach facing it
+// from 8 directions (the poses that would settle that leg).
+//
+// Randomness: none (the rng is unused; ties go to the first candidate). Allocation: in next().
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "crunch/exploration/policy.h"
+#include "crunch/exploration/whisk_prediction.h"
+
+namespace crunch::exploration {
+
+struct InfogainOptions {
+  // Metres of driving that one whisk's 8 s are worth: the time at the explore loop's cruise
+  // speed (0.2 m/s, the Create's, session/explore_loop.h).
+  double whisk_cost_m = 1.6;
+  // Distance from the robot's centre at which a leg-aimed candidate puts the leg: the middle of
+  // the whiskers' span (rim 0.165 m .. tip 0.305 m).
+  double aim_distance = 0.235;
+  double prior_legs = 1.0;     // Gamma prior on the leg density: shape (legs) ...
+  double prior_area_m2 = 1.0;  // ... and rate (m^2)
+  WhiskPredictionOptions prediction;
+};
+
+// What one candidate is worth (for tests and pictures).
+struct CandidateValue {
+  Pose2 pose;
+  double sample_bits = 0.0;   // H of the draws' outcome partition
+  double unknown_bits = 0.0;  // H_b(p) of touching something in unswept space
+  double travel_m = 0.0;
+  double score = 0.0;         // bits per metre
+};
+
+class InfogainPolicy final : public ExplorePolicy {
+ public:
+  InfogainPolicy(const PolicyOptions& options, const InfogainOptions& infogain = {});
+  ExplorePolicyKind kind() const override { return ExplorePolicyKind::kInfogain; }
+  int samplesWanted() const override { return options_.samples; }
+  Decision next(const ExploreState& state, Rng& rng) override;
+
+  // The value of whisking at `pose` in `state` (uses the state's samples and known space).
+  CandidateValue value(const ExploreState& state, const Pose2& pose);
+  // Candidates of the last next(), with their values (best first is not guaranteed).
+  const std::vector<CandidateValue>& lastCandidates() const { return values_; }
+  // lambda (legs per m^2) used by the last next() or value().
+  double legDensity() const { return lambda_; }
+
+ private:
+  void prepare(const ExploreState& state);
+  // The draws' objects within reach of `position` (flat lists, per-draw ranges) and which
+  // draws share them; sampleBits(pose) needs gather(pose.position()) first.
+  void gather(const Vec2& position);
+  double sampleBits(const Pose2& pose);
+  // The unknown cells each ray from `position` would sweep; unknownBits(pose) needs
+  // march(known, pose.position()) first.
+  void march(const KnownSpace& known, const Vec2& position);
+  // An upper bound on any heading's bits at the gathered and marched position.
+  double positionBound(double cell) const;
+  double unknownBits(const ExploreState& state, const Pose2& pose);
+  bool whiskedBefore(const Pose2& pose) const;
+
+  PolicyOptions options_;
+  InfogainOptions io_;
+  WhiskPredictor predictor_;
+  std::vector<WhiskObstacles> obstacles_;        // one per draw
+  std::vector<std::vector<WhiskerContact>> outcomes_;  // one per draw, scratch
+  std::vector<int> cls_count_;
+  std::vector<size_t> rep_scratch_;
+  std::vector<int> cls_of_;
+  std::vector<int> near_legs_, near_walls_, leg_begin_, wall_begin_, uniq_;
+  bool any_near_ = false;
+  int n_rays_ = 8;
+  std::vector<int> ray_begin_, ray_cells_;
+  std::vector<double> ray_radius_;
+  mutable std::vector<int> bound_scratch_;
+  std::vector<int> stamp_;
+  int stamp_now_ = 0;
+  double lambda_ = 1.0;
+  std::vector<Pose2> whisked_;
+  std::vector<CandidateValue> values_;
+};
+
+// H_b(p) in bits.
+double binaryEntropyBits(double p);
+// The entropy of a whisk's outcome over `area` m^2 of unswept space with legs a Poisson process
+// of density `lambda`: no touch, or a first touch at one of area / resolution^2 places.
+double unknownOutcomeBits(double lambda, double area, double resolution);
+
+}  // namespace crunch::exploration

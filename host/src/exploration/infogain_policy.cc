@@ -1,0 +1,363 @@
+#include "crunch/exploration/infogain_policy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <tuple>
+
+namespace crunch::exploration {
+
+double binaryEntropyBits(double p) {
+  if (!(p > 0.0) || !(p < 1.0)) return 0.0;
+  return -(p * std::log2(p) + (1.0 - p) * std::log2(1.0 - p));
+}
+
+double unknownOutcomeBits(double lambda, double area, double resolution) {
+  // Nothing (1 - p), or a first touch at one of K = A / resolution^2 places equally likely
+  // (p / K each): H = H_b(p) + p log2 K. Monotone in A while p <= 1/2; beyond, capped there
+  // (an upper bound suffices for the branch and bound, and p > 1/2 needs > 0.7 / lambda m^2).
+  const double p = std::min(0.5, 1.0 - std::exp(-lambda * area));
+  const double k = std::max(1.0, area / (resolution * resolution));
+  return binaryEntropyBits(p) + p * std::log2(k);
+}
+
+InfogainPolicy::InfogainPolicy(const PolicyOptions& options, const InfogainOptions& infogain)
+    : options_(options), io_(infogain), predictor_(defaultWhiskerArray(), infogain.prediction) {}
+
+bool InfogainPolicy::whiskedBefore(const Pose2& pose) const {
+  // The same whisk again repeats its outcome at the sensor's resolution: nothing new.
+  const double tol = 2.0 * io_.prediction.resolution;
+  for (const Pose2& w : whisked_) {
+    if (std::hypot(w.x - pose.x, w.y - pose.y) <= tol &&
+        std::abs(wrapPi(w.theta - pose.theta)) <= io_.prediction.amplitude / 2)
+      return true;
+  }
+  return false;
+}
+
+void InfogainPolicy::prepare(const ExploreState& state) {
+  if (predictor_.mounts().size() != state.mounts.size() ||
+      !std::equal(state.mounts.begin(), state.mounts.end(), predictor_.mounts().begin(),
+                  [](const WhiskerMount& a, const WhiskerMount& b) {
+                    return a.base == b.base && a.bearing == b.bearing && a.length == b.length;
+                  })) {
+    predictor_ = WhiskPredictor(state.mounts, io_.prediction);
+  }
+  obstacles_.resize(state.samples.size());
+  outcomes_.resize(state.samples.size());
+  double legs = 0.0;
+  // The region's edges are walls the robot knows (outside the region counts as blocked): they
+  // stop every draw's whiskers alike, and a draw's wall lying along one (both ends within
+  // 2 resolutions of the edge's line) is that edge, not news - so it is replaced by the edge,
+  // and disagreement about how far along the edge the blackboard has extended it carries no
+  // information about the map.
+  const Vec2 lo = state.known.lo(), hi = state.known.hi();
+  const MapWall edges[4] = {{lo, {hi.x(), lo.y()}, 1.0},
+                            {{hi.x(), lo.y()}, hi, 1.0},
+                            {hi, {lo.x(), hi.y()}, 1.0},
+                            {{lo.x(), hi.y()}, lo, 1.0}};
+  const double tol = 2.0 * io_.prediction.resolution;
+  auto alongEdge = [&](const MapWall& w) {
+    const bool x0 = std::abs(w.a.x() - lo.x()) < tol && std::abs(w.b.x() - lo.x()) < tol;
+    const bool x1 = std::abs(w.a.x() - hi.x()) < tol && std::abs(w.b.x() - hi.x()) < tol;
+    const bool y0 = std::abs(w.a.y() - lo.y()) < tol && std::abs(w.b.y() - lo.y()) < tol;
+    const bool y1 = std::abs(w.a.y() - hi.y()) < tol && std::abs(w.b.y() - hi.y()) < tol;
+    return x0 || x1 || y0 || y1;
+  };
+  for (size_t i = 0; i < state.samples.size(); ++i) {
+    obstacles_[i].assign(state.samples[i], edges);
+    std::vector<MapWall>& walls = obstacles_[i].walls;
+    walls.erase(std::remove_if(walls.begin(), walls.end() - 4, alongEdge), walls.end() - 4);
+    legs += static_cast<double>(obstacles_[i].legs.size());
+  }
+  if (!state.samples.empty()) legs /= static_cast<double>(state.samples.size());
+  const KnownSpace& k = state.known;
+  int known_cells = 0;
+  for (int iy = 0; iy < k.ny(); ++iy)
+    for (int ix = 0; ix < k.nx(); ++ix) known_cells += k.at(ix, iy) != KnownSpace::Cell::kUnknown;
+  const double known_m2 = known_cells * k.cell() * k.cell();
+  lambda_ = (io_.prior_legs + legs) / (io_.prior_area_m2 + known_m2);
+  stamp_.assign(static_cast<size_t>(k.nx() * k.ny()), 0);
+  stamp_now_ = 0;
+}
+
+void InfogainPolicy::gather(const Vec2& position) {
+  const size_t n = obstacles_.size();
+  near_legs_.clear();
+  near_walls_.clear();
+  leg_begin_.assign(n + 1, 0);
+  wall_begin_.assign(n + 1, 0);
+  uniq_.assign(n, 0);
+  any_near_ = false;
+  for (size_t i = 0; i < n; ++i) {
+    leg_begin_[i] = static_cast<int>(near_legs_.size());
+    wall_begin_[i] = static_cast<int>(near_walls_.size());
+    predictor_.nearReach(position, obstacles_[i], near_legs_, near_walls_);
+    leg_begin_[i + 1] = static_cast<int>(near_legs_.size());
+    wall_begin_[i + 1] = static_cast<int>(near_walls_.size());
+    any_near_ = any_near_ || leg_begin_[i + 1] > leg_begin_[i] || wall_begin_[i + 1] > wall_begin_[i];
+  }
+  // Draws whose objects within reach are the same geometry predict the same outcome: predict
+  // once per distinct set (a chain's draws often differ only far away).
+  auto same = [&](size_t a, size_t b) {
+    const int na = leg_begin_[a + 1] - leg_begin_[a], nb = leg_begin_[b + 1] - leg_begin_[b];
+    const int wa = wall_begin_[a + 1] - wall_begin_[a], wb = wall_begin_[b + 1] - wall_begin_[b];
+    if (na != nb || wa != wb) return false;
+    for (int k = 0; k < na; ++k) {
+      const OrientedRect& x = obstacles_[a].legs[static_cast<size_t>(near_legs_[static_cast<size_t>(leg_begin_[a] + k)])];
+      const OrientedRect& y = obstacles_[b].legs[static_cast<size_t>(near_legs_[static_cast<size_t>(leg_begin_[b] + k)])];
+      if (x.pose.x != y.pose.x || x.pose.y != y.pose.y || x.pose.theta != y.pose.theta ||
+          x.size_x != y.size_x || x.size_y != y.size_y)
+        return false;
+    }
+    for (int k = 0; k < wa; ++k) {
+      const MapWall& x = obstacles_[a].walls[static_cast<size_t>(near_walls_[static_cast<size_t>(wall_begin_[a] + k)])];
+      const MapWall& y = obstacles_[b].walls[static_cast<size_t>(near_walls_[static_cast<size_t>(wall_begin_[b] + k)])];
+      if (x.a != y.a || x.b != y.b) return false;
+    }
+    return true;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    uniq_[i] = static_cast<int>(i);
+    for (size_t j = 0; j < i; ++j)
+      if (uniq_[j] == static_cast<int>(j) && same(i, j)) {
+        uniq_[i] = static_cast<int>(j);
+        break;
+      }
+  }
+}
+
+double InfogainPolicy::sampleBits(const Pose2& pose) {
+  // Requires gather(pose.position()).
+  const size_t n = obstacles_.size();
+  if (n < 2 || !any_near_) return 0.0;  // every draw predicts no touch: one outcome
+  // Every draw has the same objects within reach: one outcome, whatever it is.
+  if (std::all_of(uniq_.begin(), uniq_.end(), [](int u) { return u == 0; })) return 0.0;
+  // Partition the draws by outcome (greedy: a draw joins the first class whose representative
+  // it matches). H(Y) of the partition; H(Y | M) = 0 for a deterministic quantised prediction.
+  cls_count_.assign(n, 0);
+  cls_of_.assign(n, -1);
+  std::vector<size_t>& rep = rep_scratch_;
+  rep.clear();
+  for (size_t i = 0; i < n; ++i) {
+    const size_t u = static_cast<size_t>(uniq_[i]);
+    if (u != i) {  // the same objects within reach as draw u: its outcome
+      ++cls_count_[static_cast<size_t>(cls_of_[u])];
+      cls_of_[i] = cls_of_[u];
+      continue;
+    }
+    const std::span<const int> legs(near_legs_.data() + leg_begin_[i],
+                                    static_cast<size_t>(leg_begin_[i + 1] - leg_begin_[i]));
+    const std::span<const int> walls(near_walls_.data() + wall_begin_[i],
+                                     static_cast<size_t>(wall_begin_[i + 1] - wall_begin_[i]));
+    predictor_.predictNear(pose, obstacles_[i], legs, walls, outcomes_[i]);
+    size_t c = 0;
+    for (; c < rep.size(); ++c)
+      if (sameOutcome(outcomes_[rep[c]], outcomes_[i], io_.prediction.resolution)) break;
+    if (c == rep.size()) rep.push_back(i);
+    ++cls_count_[c];
+    cls_of_[i] = static_cast<int>(c);
+  }
+  double h = 0.0;
+  for (size_t c = 0; c < rep.size(); ++c) {
+    const double p = static_cast<double>(cls_count_[c]) / static_cast<double>(n);
+    h -= p * std::log2(p);
+  }
+  return h;
+}
+
+double InfogainPolicy::positionBound(double cell) const {
+  // The draws' outcome classes are unions of the groups of draws with identical objects in
+  // reach, so H(Y) is at most the entropy of those groups' sizes; the unswept area one heading
+  // sweeps is at most the whole ring's, and H_b grows up to p = 1/2.
+  double h = 0.0;
+  if (any_near_) {
+    const size_t n = uniq_.size();
+    std::vector<int>& count = bound_scratch_;
+    count.assign(n, 0);
+    for (const int u : uniq_) ++count[static_cast<size_t>(u)];
+    for (const int k : count)
+      if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
+  }
+  // unknownOutcomeBits grows with the area.
+  const double area = static_cast<double>(ray_cells_.size()) * cell * cell;
+  return h + unknownOutcomeBits(lambda_, area, io_.prediction.resolution) + 1e-12;
+}
+
+void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
+  // Rays from the centre around the whole circle, half a cell apart at the whiskers' tips, each
+  // marched outward half a cell at a time from the rim to the tip and stopped by the first
+  // occupied cell (a whisker stops there): the unknown cells each ray would sweep. The default
+  // whiskers point radially outward from the rim, so a whisker turned to angle a sweeps ray a.
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  for (const WhiskerMount& m : predictor_.mounts()) {
+    rmin = std::min(rmin, m.base.norm());
+    rmax = std::max(rmax, (m.base + m.length * m.direction()).norm());
+  }
+  const double step = 0.5 * k.cell();
+  n_rays_ = std::max(8, static_cast<int>(std::ceil(2.0 * kPi * rmax / step)));
+  const int nr = std::max(1, static_cast<int>(std::ceil((rmax - rmin) / step)));
+  ray_begin_.assign(static_cast<size_t>(n_rays_) + 1, 0);
+  ray_cells_.clear();
+  ray_radius_.clear();
+  for (int j = 0; j < n_rays_; ++j) {
+    ray_begin_[static_cast<size_t>(j)] = static_cast<int>(ray_cells_.size());
+    const double a = 2.0 * kPi * j / n_rays_;
+    const Vec2 dir{std::cos(a), std::sin(a)};
+    for (int r = 0; r <= nr; ++r) {
+      const double rad = rmin + (rmax - rmin) * r / nr;
+      int ix, iy;
+      if (!k.index(position + rad * dir, ix, iy)) break;
+      const KnownSpace::Cell c = k.at(ix, iy);
+      if (c == KnownSpace::Cell::kOccupied) break;
+      if (c != KnownSpace::Cell::kUnknown) continue;
+      ray_cells_.push_back(iy * k.nx() + ix);
+      ray_radius_.push_back(rad);
+    }
+  }
+  ray_begin_[static_cast<size_t>(n_rays_)] = static_cast<int>(ray_cells_.size());
+}
+
+double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose) {
+  // Requires march(state.known, pose.position()).
+  const double cell = state.known.cell();
+  ++stamp_now_;
+  int unknown = 0;
+  const double amp = io_.prediction.amplitude;
+  const double per_ray = 2.0 * kPi / n_rays_;
+  for (const WhiskerMount& m : predictor_.mounts()) {
+    const double r0 = m.base.norm() - 1e-9, r1 = (m.base + m.length * m.direction()).norm() + 1e-9;
+    const double a = pose.theta + m.bearing;
+    const int j0 = static_cast<int>(std::ceil((a - amp) / per_ray));
+    const int j1 = static_cast<int>(std::floor((a + amp) / per_ray));
+    for (int jj = j0; jj <= j1; ++jj) {
+      const int j = ((jj % n_rays_) + n_rays_) % n_rays_;
+      for (int q = ray_begin_[static_cast<size_t>(j)]; q < ray_begin_[static_cast<size_t>(j) + 1]; ++q) {
+        const double rad = ray_radius_[static_cast<size_t>(q)];
+        if (rad < r0 || rad > r1) continue;
+        int& s = stamp_[static_cast<size_t>(ray_cells_[static_cast<size_t>(q)])];
+        if (s == stamp_now_) continue;
+        s = stamp_now_;
+        ++unknown;
+      }
+    }
+  }
+  const double area = unknown * cell * cell;
+  return unknownOutcomeBits(lambda_, area, io_.prediction.resolution);
+}
+
+CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pose) {
+  if (obstacles_.size() != state.samples.size() || stamp_.empty()) prepare(state);
+  CandidateValue v;
+  v.pose = pose;
+  v.travel_m = state.travel.to(pose.position());
+  if (!std::isfinite(v.travel_m) || whiskedBefore(pose)) return v;
+  gather(pose.position());
+  march(state.known, pose.position());
+  v.sample_bits = sampleBits(pose);
+  v.unknown_bits = unknownBits(state, pose);
+  v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
+  return v;
+}
+
+Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
+  // The pose just whisked (the robot stands where its last whisk began).
+  if (state.whisks > 0) whisked_.push_back(state.robot);
+  prepare(state);
+  values_.clear();
+  std::vector<Pose2> candidates;
+  const KnownSpace& k = state.known;
+  const double step = options_.candidate_spacing;
+  const int nh = options_.candidate_headings;
+  const Vec2 lo = k.lo(), hi = k.hi();
+  for (double y = lo.y() + 0.5 * step; y < hi.y(); y += step)
+    for (double x = lo.x() + 0.5 * step; x < hi.x(); x += step) {
+      const Vec2 p{x, y};
+      if (state.costmap.blocked(p) || !std::isfinite(state.travel.to(p))) continue;
+      for (int h = 0; h < nh; ++h) candidates.push_back({x, y, wrapPi(2.0 * kPi * h / nh)});
+    }
+  // Fig. 7: the poses that would settle each leg of each draw.
+  const size_t lattice = candidates.size();
+  for (const WhiskObstacles& o : obstacles_)
+    for (const OrientedRect& leg : o.legs)
+      for (int d = 0; d < 8; ++d) {
+        const double a = 2.0 * kPi * d / 8;
+        const Vec2 p = leg.pose.position() - io_.aim_distance * Vec2{std::cos(a), std::sin(a)};
+        if (state.costmap.blocked(p) || !std::isfinite(state.travel.to(p))) continue;
+        candidates.push_back({p.x(), p.y(), wrapPi(a)});
+      }
+  // Duplicates (draws agreeing on a leg) are scored once.
+  auto key = [](const Pose2& q) {
+    return std::make_tuple(std::lround(q.x / 0.01), std::lround(q.y / 0.01),
+                           std::lround(wrapPi(q.theta) / 0.05));
+  };
+  std::sort(candidates.begin() + static_cast<std::ptrdiff_t>(lattice), candidates.end(),
+            [&](const Pose2& a, const Pose2& b) { return key(a) < key(b); });
+  candidates.erase(std::unique(candidates.begin() + static_cast<std::ptrdiff_t>(lattice),
+                               candidates.end(),
+                               [&](const Pose2& a, const Pose2& b) { return key(a) == key(b); }),
+                   candidates.end());
+
+  // Nearest first; a candidate is worth at most log2(draws) bits from the draws and 1 bit
+  // (a Bernoulli) from unswept space, so once that bound over the travel falls below the best
+  // score no farther candidate can win (exact branch and bound; the lattice's headings of one
+  // position stay together, the sort being stable).
+  std::vector<double> travel(candidates.size());
+  for (size_t i = 0; i < candidates.size(); ++i) travel[i] = state.travel.to(candidates[i].position());
+  std::vector<size_t> order(candidates.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return travel[a] < travel[b]; });
+  const double max_bits =
+      (obstacles_.size() > 1 ? std::log2(static_cast<double>(obstacles_.size())) : 0.0) + 1.0;
+  Decision d;
+  int best = -1;
+  Vec2 gathered{std::numeric_limits<double>::quiet_NaN(), 0.0};
+  double position_bound = max_bits;
+  for (const size_t ci : order) {
+    const Pose2& c = candidates[ci];
+    if (best >= 0 && max_bits / (travel[ci] + io_.whisk_cost_m) <= values_[static_cast<size_t>(best)].score)
+      break;
+    CandidateValue v;
+    v.pose = c;
+    v.travel_m = travel[ci];
+    if (std::isfinite(v.travel_m) && !whiskedBefore(c)) {
+      if (!(c.position() == gathered)) {  // the lattice's headings share a position
+        gather(c.position());
+        march(state.known, c.position());
+        gathered = c.position();
+        position_bound = positionBound(state.known.cell());
+      }
+      // No heading here can beat the best: skip the predictions (exact, see positionBound).
+      if (best >= 0 && position_bound / (v.travel_m + io_.whisk_cost_m) <=
+                           values_[static_cast<size_t>(best)].score) {
+        values_.push_back(v);
+        continue;
+      }
+      v.sample_bits = sampleBits(c);
+      v.unknown_bits = unknownBits(state, c);
+      v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
+    }
+    values_.push_back(v);
+    if (best < 0 || values_.back().score > values_[static_cast<size_t>(best)].score)
+      best = static_cast<int>(values_.size()) - 1;
+  }
+  if (best < 0) {
+    d.why = "no reachable whisk pose";
+    return d;
+  }
+  const CandidateValue& b = values_[static_cast<size_t>(best)];
+  if (!(b.score > options_.min_bits_per_metre) || b.score <= 1e-9) {
+    d.why = "no candidate worth its travel";
+    d.score = b.score;
+    return d;
+  }
+  d.goal = b.pose;
+  d.score = b.score;
+  return d;
+}
+
+std::unique_ptr<ExplorePolicy> makeInfogainPolicy(const PolicyOptions& options) {
+  return std::make_unique<InfogainPolicy>(options);
+}
+
+}  // namespace crunch::exploration

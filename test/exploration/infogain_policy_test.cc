@@ -1,0 +1,172 @@
+// Tests of `--explore infogain` (crunch/exploration/infogain_policy.h): Fig. 7's rival tables
+// send the robot to a disputed leg; what every draw agrees on is worth nothing; a fully known,
+// empty room stops the run; unknown space is worth visiting; the choice is deterministic.
+#include "crunch/exploration/infogain_policy.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+using namespace crunch;
+using namespace crunch::exploration;
+
+namespace {
+
+// Fig. 7: legs L1 (1.0, 1.5) and L2 (1.75, 1.5) are touched; T1 (north) and T2 (south) explain
+// them equally; half the draws hold each. T1's other legs are at y = 1.95, T2's at y = 1.05.
+MapTable table(double x, double y) {
+  MapTable t;
+  t.pose = {x, y, 0.0};
+  return t;
+}
+const MapTable kNorth = table(1.375, 1.725);
+const MapTable kSouth = table(1.375, 1.275);
+
+struct World {
+  KnownSpace known{{0.0, 0.0}, {3.0, 3.0}, 0.05};
+  std::vector<MapSample> samples;
+  std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  ModelParams model;
+  PlannerOptions planner;
+};
+
+struct State {
+  Costmap costmap;
+  DistanceField travel;
+  ExploreState state;
+  State(World& w, const Pose2& robot)
+      : costmap(w.known, w.planner),
+        travel(costmap, robot.position()),
+        state{robot, w.known, costmap, travel, w.samples, w.mounts, w.model, {}, 1, 0.0} {}
+};
+
+// Everything swept (known free), L1 and L2 touched.
+void knownRoomWithTouchedLegs(World& w) {
+  w.known.markBody({1.5, 1.5}, 5.0);
+  w.known.markContact({1.0, 1.5});
+  w.known.markContact({1.75, 1.5});
+}
+
+bool reachesDisputedLeg(const Pose2& pose) {
+  WhiskPredictor p(defaultWhiskerArray());
+  std::vector<WhiskerContact> out;
+  for (const MapTable& t : {kNorth, kSouth}) {
+    MapSample s;
+    s.tables.push_back(t);
+    WhiskObstacles obs;
+    obs.assign(s);
+    p.predict(pose, obs, out);
+    for (const WhiskerContact& c : out)
+      if (c.hit && std::abs(c.point.y() - 1.5) > 0.2) return true;  // not L1 or L2
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("Infogain: rival tables send the robot to touch a disputed leg (Fig. 7)",
+          "[exploration][infogain]") {
+  World w;
+  knownRoomWithTouchedLegs(w);
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}});
+  State s(w, {2.6, 2.6, 0.0});
+  InfogainPolicy policy(PolicyOptions{});
+  Rng rng(1);
+  const Decision d = policy.next(s.state, rng);
+  REQUIRE(d.goal);
+  INFO("goal " << d.goal->x << " " << d.goal->y << " " << d.goal->theta << " score " << d.score);
+  CHECK(reachesDisputedLeg(*d.goal));
+  // The draws split 8:8 there: one bit, nothing from the (fully swept) space.
+  const CandidateValue v = policy.value(s.state, *d.goal);
+  CHECK(v.sample_bits == Approx(1.0));
+  CHECK(v.unknown_bits == 0.0);
+  CHECK(d.score == Approx(1.0 / (v.travel_m + InfogainOptions{}.whisk_cost_m)));
+
+  // Whisking the shared leg L1 from the west tells nothing: both tables predict the same touch.
+  const CandidateValue shared = policy.value(s.state, {1.0 - 0.235, 1.5, 0.0});
+  CHECK(shared.travel_m < 1e9);
+  CHECK(shared.sample_bits == 0.0);
+}
+
+TEST_CASE("Infogain: draws that agree are worth nothing; a known empty room stops the run",
+          "[exploration][infogain]") {
+  World w;
+  knownRoomWithTouchedLegs(w);
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{kNorth}, {}});  // no rival
+  State s(w, {2.6, 2.6, 0.0});
+  InfogainPolicy policy(PolicyOptions{});
+  Rng rng(1);
+  const Decision d = policy.next(s.state, rng);
+  CHECK_FALSE(d.goal);
+  CHECK(d.why == "no candidate worth its travel");
+
+  World empty;
+  empty.known.markBody({1.5, 1.5}, 5.0);
+  State e(empty, {1.5, 1.5, 0.0});
+  InfogainPolicy p2(PolicyOptions{});
+  CHECK_FALSE(p2.next(e.state, rng).goal);
+}
+
+TEST_CASE("Infogain: unswept space is worth the Poisson prior's bits, and the choice is "
+          "deterministic", "[exploration][infogain]") {
+  World w;  // nothing swept, no draws yet
+  w.known.markBody({0.6, 0.6}, 0.3);
+  State s(w, {0.6, 0.6, 0.0});
+  InfogainPolicy a(PolicyOptions{}), b(PolicyOptions{});
+  Rng r1(1), r2(99);
+  const Decision da = a.next(s.state, r1);
+  const Decision db = b.next(s.state, r2);
+  REQUIRE(da.goal);
+  REQUIRE(db.goal);
+  CHECK(da.goal->x == db.goal->x);
+  CHECK(da.goal->y == db.goal->y);
+  CHECK(da.goal->theta == db.goal->theta);
+  const CandidateValue v = a.value(s.state, *da.goal);
+  CHECK(v.sample_bits == 0.0);
+  // lambda = (1 prior leg + 0) / (1 m^2 + swept area): below 1 leg per m^2. The whiskers'
+  // band (0.165..0.305 m over 97.5 degrees, 0.056 m^2) touches at most 45 cells of 5 cm
+  // (0.11 m^2, cells counted whole), so p = 1 - exp(-lambda A) < 0.11; the outcome is no touch
+  // or a touch at one of A / (15 mm)^2 places: H_b(p) + p log2(A / 0.015^2) bits at most.
+  CHECK(a.legDensity() < 1.0);
+  CHECK(v.unknown_bits > 0.05);
+  CHECK(v.unknown_bits < unknownOutcomeBits(1.0, 0.11, 0.015));
+  CHECK(unknownOutcomeBits(1.0, 0.11, 0.015) ==
+        Approx(binaryEntropyBits(1 - std::exp(-0.11)) +
+               (1 - std::exp(-0.11)) * std::log2(0.11 / (0.015 * 0.015))));
+  // The same pose again (the robot whisked there) is worth nothing.
+  ExploreState again = s.state;
+  again.robot = *da.goal;
+  again.whisks = 2;
+  a.next(again, r1);
+  CHECK(a.value(again, *da.goal).score == 0.0);
+}
+
+TEST_CASE("Infogain: the region's edges are known walls; draws disagreeing only on how far a "
+          "wall runs along an edge carry no information", "[exploration][infogain]") {
+  World w;
+  w.known.markBody({1.5, 1.5}, 5.0);
+  // Half the draws extend the wall along the edge y = 0 (placed 2 cm in, as noisy contacts put
+  // it) to x = 1.0, half only to x = 0.5.
+  for (int i = 0; i < 16; ++i) {
+    MapSample s;
+    s.walls.push_back({{0.0, 0.02}, {i % 2 ? 1.0 : 0.5, 0.02}, 1.0});
+    w.samples.push_back(s);
+  }
+  State s(w, {1.5, 1.5, 0.0});
+  InfogainPolicy policy(PolicyOptions{});
+  // Facing the edge at x = 0.75, where the draws' walls differ: the edge is there in all.
+  const CandidateValue edge = policy.value(s.state, {0.75, 0.25, -kPi / 2});
+  REQUIRE(edge.travel_m < 1e9);  // reachable: a real score, not the unreachable 0
+  CHECK(edge.sample_bits == 0.0);
+  // The same disagreement about an interior wall (y = 1.0) is worth a bit.
+  World v;
+  v.known.markBody({1.5, 1.5}, 5.0);
+  for (int i = 0; i < 16; ++i) {
+    MapSample m;
+    m.walls.push_back({{0.3, 1.0}, {i % 2 ? 1.0 : 0.5, 1.0}, 1.0});
+    v.samples.push_back(m);
+  }
+  State t(v, {1.5, 1.5, 0.0});
+  InfogainPolicy p2(PolicyOptions{});
+  CHECK(p2.value(t.state, {0.75, 1.25, -kPi / 2}).sample_bits == Approx(1.0));
+}
