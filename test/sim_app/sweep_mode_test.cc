@@ -298,3 +298,31 @@ TEST_CASE("sweep: bad options exit 2 naming the option and write nothing", "[app
     CHECK_FALSE(std::filesystem::exists(out_dir));
   }
 }
+
+TEST_CASE("sweep --explore: an unknown policy or a bad budget exits 2 naming the option, writes "
+          "nothing", "[app][sweep][explore]") {
+  TempDir d;
+  const std::string out_dir = d.file("out");
+  struct Case {
+    std::string option, explore, travel, whisks;
+  };
+  // Unknown names and negative budgets are the exploration library's checks
+  // (explorePolicyByName, ExploreOptions::validate); a budget without a policy is the grid's.
+  const std::vector<Case> cases = {{"--explore", "grid,teleport", "", ""},
+                                   {"--travel-budget", "grid", "-1", ""},
+                                   {"--travel-budget", "grid", "0", ""},
+                                   {"--whisk-budget", "random", "", "-3"},
+                                   {"--travel-budget", "", "10", ""},
+                                   {"--travel-budget", "none", "10", ""}};
+  for (const Case& c : cases) {
+    app::SweepOptions o = tinyGrid(out_dir);
+    o.grid.explore = c.explore;
+    o.grid.travel_budget = c.travel;
+    o.grid.whisk_budget = c.whisks;
+    const Run r = sweep(o);
+    INFO(c.option << " (explore '" << c.explore << "'): " << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(c.option) != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(out_dir));
+  }
+}

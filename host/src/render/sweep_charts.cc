@@ -376,7 +376,7 @@ Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
     ChartSeries target;
     target.label = "recall " + fmt("%g", h.recall_target) + " (issue 14's target)";
     target.style = SeriesStyle::kLine;
-    target.colour = kGrey;
+    target.colour = kBlack;
     target.dashed = true;
     target.line_width = 1.0;
     target.x = {0.0, h.travel.back()};
