@@ -256,3 +256,26 @@ TEST_CASE("Explore curves: bad lines are errors naming the file, line and column
   CHECK_THAT(loadExploreCurves(dir.file("empty.csv")).error().message,
              Catch::Contains("no curve point"));
 }
+
+TEST_CASE("Explore curves: a run's travel after its last whisk extends the axis and its figures",
+          "[sweep][explore]") {
+  const std::string header = "scene,model,explore,noise,seed,travel_m,whisks,recall,precision,f1,"
+                             "run_travel_m\n";
+  // grid whisks at 1 m and stops at 2 m; random whisks at 1 m, then drives on to 8 m.
+  const auto curves = parseExploreCurves(header +
+                                             "s,paper,grid,realistic,1,1,1,0.5,1,0.6,2\n"
+                                             "s,paper,random,realistic,1,1,1,0.25,1,0.4,8\n",
+                                         "c.csv");
+  REQUIRE(curves);
+  CHECK(curves.value()[1].run_travel_m == 8.0);
+  const auto all = exploreSummaries(curves.value(), 9);
+  REQUIRE(all.size() == 2);
+  CHECK(all[0].travel.back() == 8.0);  // to the longest run, not its last whisk
+  CHECK(all[0].recall_mean.back() == Approx(0.5));
+  CHECK(all[0].final_travel_mean == Approx(2.0));
+  CHECK(all[1].final_travel_mean == Approx(8.0));
+  CHECK_THAT(parseExploreCurves(header + "s,paper,grid,realistic,1,3,1,0.5,1,0.6,2\n", "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("run_travel_m") && Catch::Contains("below"));
+}

@@ -41,7 +41,8 @@ const std::vector<std::string> kSweepColumns = {
 
 const std::vector<std::string> kCurveColumns = {
     "grid_index", "scene",    "model",  "explore", "noise",     "seed",
-    "whisk",      "travel_m", "whisks", "recall",  "precision", "f1"};
+    "whisk",      "travel_m", "whisks", "recall",  "precision", "f1",
+    "run_travel_m"};
 
 namespace {
 
@@ -672,7 +673,7 @@ std::string sweepCurvesCsv(const std::vector<SweepRow>& rows) {
     for (size_t k = 0; k < r.curve.size(); ++k) {
       const SweepCurvePoint& p = r.curve[k];
       Json v = Json::array({r.grid_index, r.scene, r.model, r.explore, r.noise, r.seed, k,
-                            p.travel_m, p.whisks, p.recall, p.precision, p.f1});
+                            p.travel_m, p.whisks, p.recall, p.precision, p.f1, r.travel_m});
       for (size_t c = 0; c < v.size(); ++c) {
         if (c) out += ',';
         out += csvField(v[c]);

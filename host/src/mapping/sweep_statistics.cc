@@ -7,6 +7,7 @@
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <tuple>
 
@@ -321,6 +322,9 @@ Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
       return Error{source + ": line 1 (header) has no column '" + std::string(name) + "'"};
     col.push_back(static_cast<size_t>(it - header.begin()));
   }
+  std::optional<size_t> run_col;  // optional: curves.csv before the column
+  if (const auto it = std::find(header.begin(), header.end(), "run_travel_m"); it != header.end())
+    run_col = static_cast<size_t>(it - header.begin());
   std::vector<ExploreCurve> curves;
   for (int n = 2; std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -365,6 +369,14 @@ Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
       curves.push_back(key);
       it = curves.end() - 1;
     }
+    if (run_col) {
+      double run = 0;
+      const std::string& t = f[*run_col];
+      if (!parseDouble(t, run) || !std::isfinite(run) || run < 0)
+        return Error{where + ": column 'run_travel_m' must be a finite number >= 0, not '" + t +
+                     "'"};
+      it->run_travel_m = run;
+    }
     if (!it->travel_m.empty() && travel < it->travel_m.back())
       return Error{where + ": column 'travel_m' goes down within a run (" + fmt("%g", travel) +
                    " after " + fmt("%g", it->travel_m.back()) + ")"};
@@ -373,7 +385,13 @@ Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
     it->recall.push_back(recall);
     it->precision.push_back(precision);
     it->f1.push_back(f1);
+    if (!run_col) it->run_travel_m = travel;
   }
+  for (const ExploreCurve& c : curves)
+    if (c.run_travel_m < c.travel_m.back())
+      return Error{source + ": run " + c.explore + " seed " + std::to_string(c.seed) + " of " +
+                   c.scene + ": run_travel_m " + fmt("%g", c.run_travel_m) +
+                   " is below its last whisk's travel_m " + fmt("%g", c.travel_m.back())};
   return curves;
 }
 
@@ -411,7 +429,7 @@ std::vector<ExploreSummary> exploreSummaries(const std::vector<ExploreCurve>& cu
     };
     double longest = 0.0;
     for (const ExploreCurve& c : curves)
-      if (same_group(c) && !c.travel_m.empty()) longest = std::max(longest, c.travel_m.back());
+      if (same_group(c)) longest = std::max(longest, c.run_travel_m);
     if (longest <= 0.0) longest = 1.0;  // only whisks at the start: any axis shows them
     std::vector<double> axis(static_cast<size_t>(samples));
     for (int i = 0; i < samples; ++i) axis[static_cast<size_t>(i)] = longest * i / (samples - 1);
@@ -447,7 +465,7 @@ std::vector<ExploreSummary> exploreSummaries(const std::vector<ExploreCurve>& cu
       std::vector<double> travel, whisks, recall, f1, reach;
       for (const ExploreCurve* c : runs) {
         const bool any = !c->travel_m.empty();
-        travel.push_back(any ? c->travel_m.back() : 0.0);
+        travel.push_back(c->run_travel_m);
         whisks.push_back(any ? c->whisks.back() : 0.0);
         recall.push_back(any ? c->recall.back() : 0.0);
         f1.push_back(any ? c->f1.back() : 0.0);
@@ -472,7 +490,7 @@ std::vector<ExploreSummary> exploreSummaries(const std::vector<ExploreCurve>& cu
 
 std::string exploreSummaryCsv(const std::vector<ExploreSummary>& all) {
   std::ostringstream o;
-  o << "scene,model,noise,explore,runs,travel_m_mean,whisks_mean,recall_mean,recall_sd,f1_mean,"
+  o << "scene,model,noise,explore,runs,run_travel_m_mean,whisks_mean,recall_mean,recall_sd,f1_mean,"
        "f1_sd,recall_target,seeds_reaching_target,travel_to_target_mean_m,"
        "mean_curve_travel_to_target_m\n";
   auto num = [](double v, const char* f) { return std::isfinite(v) ? fmt(f, v) : std::string(); };

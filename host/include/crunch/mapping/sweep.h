@@ -136,7 +136,8 @@ struct SweepCurvePoint {
 };
 
 // The columns of curves.csv, in order: one line per curve point of every explore row, rows in
-// grid order, points in whisk order.
+// grid order, points in whisk order; run_travel_m is the row's travel_m (the run may drive on
+// after its last whisk).
 extern const std::vector<std::string> kCurveColumns;
 
 // One row of sweep.csv / sweep.json (kSweepColumns, in order).

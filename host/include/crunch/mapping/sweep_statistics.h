@@ -102,6 +102,8 @@ struct ExploreCurve {
   std::uint64_t seed = 0;
   std::vector<double> travel_m, recall, precision, f1;
   std::vector<int> whisks;
+  // Metres the run drove in all (curves.csv run_travel_m; without the column, the last whisk's).
+  double run_travel_m = 0.0;
 };
 
 // curves.csv's text into its runs, grouped by (scene, model, explore, noise, seed) in order of
@@ -123,7 +125,7 @@ double curveValueAt(const std::vector<double>& travel, const std::vector<double>
 
 // One policy on one (scene, model, noise), over its seeds: recall and F1 on a common travel
 // axis (shared by every policy of the same scene, model and noise: 0 to the longest run's
-// travel, evenly spaced), mean and sample sd (n - 1; 0 for one seed) over the seeds at each
+// run_travel_m, evenly spaced), mean and sample sd (n - 1; 0 for one seed) over the seeds at each
 // travel; the runs' final figures; and how far each seed drove before its fused map first
 // reached recall >= recall_target.
 struct ExploreSummary {
@@ -131,7 +133,8 @@ struct ExploreSummary {
   int runs = 0;
   std::vector<double> travel;  // the common axis, metres
   std::vector<double> recall_mean, recall_sd, f1_mean, f1_sd;
-  double final_travel_mean = 0.0, final_whisks_mean = 0.0;
+  double final_travel_mean = 0.0;  // run_travel_m
+  double final_whisks_mean = 0.0;
   double final_recall_mean = 0.0, final_recall_sd = 0.0, final_f1_mean = 0.0, final_f1_sd = 0.0;
   double recall_target = 0.9;
   int reached = 0;  // seeds whose recall reached the target
