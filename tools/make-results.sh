@@ -18,11 +18,13 @@
 #       (the straight-line length of its pose list in order, at most EXPLORE_MAX_BUDGET m, default
 #       300), drawn by sweep-chart (recall and F1 against metres driven, one chart per scene) into
 #       docs/img/results/explore/ (docs/RESULTS.md "Exploration: recall against travel").
-#       EXPLORE_POLICIES, EXPLORE_SEEDS and EXPLORE_SCENES (space-separated) override the
-#       policies, the seed count and the scenes; `bash tools/make-results.sh --only explore` runs
+#       EXPLORE_POLICIES, EXPLORE_SEEDS, EXPLORE_SCENES (space-separated) and EXPLORE_MODEL
+#       (default paper, as --sim; rooms for tables of any size) override the policies, the seed
+#       count, the scenes and the object model; `bash tools/make-results.sh --only explore` runs
 #       only this step.
 # The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
 # sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N] [--only explore]
+# (CRUNCHHOST_BIN=PATH: run that crunchhost and build nothing.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 JOBS=$(nproc)
@@ -35,9 +37,9 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 
-cmake --preset default >/dev/null
-cmake --build build/default --target crunchhost scale_bench
-BIN=build/default/host/app/crunchhost
+[[ -n "${CRUNCHHOST_BIN:-}" ]] || cmake --preset default >/dev/null
+[[ -n "${CRUNCHHOST_BIN:-}" ]] || cmake --build build/default --target crunchhost scale_bench
+BIN=${CRUNCHHOST_BIN:-build/default/host/app/crunchhost}
 RAW=build/results
 IMG=docs/img/results
 mkdir -p "$RAW" "$IMG"
@@ -46,7 +48,7 @@ mkdir -p "$RAW" "$IMG"
 explore_step() {
   local policies="${EXPLORE_POLICIES:-grid,random,frontier,entropy,infogain}"
   local seeds="${EXPLORE_SEEDS:-5}" max_budget="${EXPLORE_MAX_BUDGET:-300}"
-  local scenes="${EXPLORE_SCENES:-}"
+  local scenes="${EXPLORE_SCENES:-}" model="${EXPLORE_MODEL:-paper}"
   if [[ -z "$scenes" ]]; then
     scenes="default"
     for f in test/scenes/*.json; do
@@ -85,8 +87,8 @@ print("%.1f" % min(cap, 1.25 * length))
 PY
 )
     echo "make-results (f): $stem, travel budget $budget m"
-    "$BIN" sweep --scene "$scene" --explore "$policies" --travel-budget "$budget" \
-        --seeds "$seeds" --jobs "$JOBS" --out "$raw/$stem"
+    "$BIN" sweep --scene "$scene" --model "$model" --explore "$policies" \
+        --travel-budget "$budget" --seeds "$seeds" --jobs "$JOBS" --out "$raw/$stem"
     if [[ ! -s "$raw/all/curves.csv" ]]; then
       cp "$raw/$stem/curves.csv" "$raw/all/curves.csv"
     else
