@@ -326,3 +326,46 @@ TEST_CASE("sweep --explore: an unknown policy or a bad budget exits 2 naming the
     CHECK_FALSE(std::filesystem::exists(out_dir));
   }
 }
+
+TEST_CASE("sweep --explore: a row carries the run's travel and whisks, its curve goes to "
+          "curves.csv, as --sim --explore reports them", "[app][sweep][explore]") {
+  // One driven run on two_tables.json, stopped after 6 whisks, against the same --sim run.
+  TempDir sw, sim;
+  app::SweepOptions o = tinyGrid(sw.path().string());
+  o.grid.schedule_steps = "4";
+  o.grid.seeds = "1";
+  o.grid.explore = "frontier";
+  o.grid.whisk_budget = "6";
+  const Run r = sweep(o);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const Json row = rows(sw.path().string()).at(0);
+  CHECK(row["explore"] == "frontier");
+  const auto curves = csvCells(slurp(sw.file("curves.csv")));
+  REQUIRE(curves.size() >= 2);
+  CHECK(curves[0].back() == "run_travel_m");
+  const int whisks = row["whisks"].get<int>();
+  CHECK(whisks >= 1);
+  CHECK(whisks <= 6);
+  CHECK(static_cast<int>(curves.size()) - 1 == whisks);  // one line per whisk
+  CHECK(std::stod(curves.back()[12]) == Approx(row["travel_m"].get<double>()));  // run_travel_m
+
+  app::SimOptions so;
+  so.scene_path = kScene;
+  so.noise = "realistic";
+  so.seed = 1;
+  so.mapping.sampler.schedule_steps = 4;
+  so.explore = "frontier";
+  so.whisk_budget = 6;
+  so.out_dir = sim.path().string();
+  std::ostringstream out, err;
+  REQUIRE(app::runSim(so, out, err) == 0);
+  const Json ex = Json::parse(slurp(sim.file("report.json")))["exploration"];
+  CHECK(row["travel_m"] == ex["travel_m"]);
+  CHECK(row["whisks"] == ex["whisks"]);
+  REQUIRE(ex["curve"].size() == static_cast<size_t>(whisks));
+  const Json& last = ex["curve"].back();
+  CHECK(std::stod(curves.back()[7]) == Approx(last["travel_m"].get<double>()));
+  CHECK(std::stod(curves.back()[9]) == Approx(last["recall"].get<double>()));
+  CHECK(std::stod(curves.back()[11]) == Approx(last["f1"].get<double>()));
+}
