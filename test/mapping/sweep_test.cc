@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -302,4 +303,31 @@ TEST_CASE("Sweep curves.csv: one line per whisk of every explore row, written be
   const SweepGrid pg = buildSweepGrid(smallSpec()).value();
   REQUIRE(writeSweepFiles({rowAt(pg, 0, {})}, plain.path().string()));
   CHECK_FALSE(std::ifstream(plain.file("curves.csv")).good());
+}
+
+TEST_CASE("Sweep merge: explore shards' curves come back from their curves.csv", "[sweep]") {
+  SweepGridSpec spec = smallSpec();
+  spec.explore = "grid";
+  const SweepGrid g = buildSweepGrid(spec).value();
+  const SweepShard s0 = parseSweepShard("0/2").value(), s1 = parseSweepShard("1/2").value();
+  std::vector<SweepRow> even, odd;
+  for (size_t i = 0; i < g.size(); ++i) {
+    SweepRow r = rowAt(g, i, i % 2 ? s1 : s0);
+    r.travel_m = static_cast<double>(i);
+    for (int k = 0; k <= static_cast<int>(i % 3); ++k)  // 1 to 3 points per run
+      r.curve.push_back({0.5 * k, k + 1, 0.1 * k, 1.0, 0.05 * k});
+    (i % 2 ? odd : even).push_back(r);
+  }
+  std::vector<SweepRow> all;
+  for (size_t i = 0; i < g.size(); ++i) all.push_back(i % 2 ? odd[i / 2] : even[i / 2]);
+  TempDir a, b;
+  REQUIRE(writeSweepFiles(odd, a.path().string()));
+  REQUIRE(writeSweepFiles(even, b.path().string()));
+  const auto merged = mergeSweepShards({a.path().string(), b.path().string()});
+  REQUIRE(merged);
+  CHECK(sweepCurvesCsv(merged.value()) == sweepCurvesCsv(all));
+  CHECK(merged.value()[4].curve.size() == 2);
+  std::filesystem::remove(a.file("curves.csv"));
+  CHECK_THAT(mergeSweepShards({a.path().string(), b.path().string()}).error().message,
+             Catch::Contains("curves.csv"));
 }

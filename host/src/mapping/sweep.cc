@@ -616,18 +616,77 @@ Result<std::vector<SweepRow>> parseSweepRows(const std::string& text, const std:
   return rows;
 }
 
+namespace {
+
+// One curves.csv line into fields (the writer quotes a field holding a comma or a quote).
+std::vector<std::string> csvLineFields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+      out.back() += '"';
+      ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  return out;
+}
+
+// A shard's curves.csv back into the curves of its rows (by grid_index). Errors name the file.
+Status readShardCurves(const std::string& dir, std::vector<std::optional<SweepRow>>& slots) {
+  const std::string path = dir + "/curves.csv";
+  auto text = readFile(path);
+  if (!text) return Error{text.error().message + " (an explore shard writes one)"};
+  std::istringstream in(text.value());
+  std::string line, header;
+  for (size_t c = 0; c < kCurveColumns.size(); ++c) header += (c ? "," : "") + kCurveColumns[c];
+  if (!std::getline(in, line) || line != header)
+    return Error{path + ": line 1 is not curves.csv's header"};
+  for (int n = 2; std::getline(in, line); ++n) {
+    if (line.empty()) continue;
+    const std::vector<std::string> f = csvLineFields(line);
+    const std::string where = path + ": line " + std::to_string(n);
+    if (f.size() != kCurveColumns.size()) return Error{where + ": not " + std::to_string(kCurveColumns.size()) + " fields"};
+    try {
+      const size_t index = std::stoul(f[0]);
+      if (index >= slots.size() || !slots[index])
+        return Error{where + ": grid_index " + f[0] + " is not a row of its sweep.json"};
+      auto num = [](const std::string& s) {
+        return s == "null" ? std::numeric_limits<double>::quiet_NaN() : std::stod(s);
+      };
+      slots[index]->curve.push_back(
+          {num(f[7]), std::stoi(f[8]), num(f[9]), num(f[10]), num(f[11])});
+    } catch (const std::exception&) {
+      return Error{where + ": a number column does not read"};
+    }
+  }
+  return okStatus();
+}
+
+}  // namespace
+
 Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& dirs) {
   if (dirs.empty()) return Error{"no shard directories given"};
   std::optional<std::string> grid;
   std::optional<size_t> grid_size;
   std::string grid_from;
   std::vector<std::optional<SweepRow>> slots;
+  std::vector<std::string> explored_dirs;
   for (const std::string& dir : dirs) {
     const std::string path = dir + "/sweep.json";
     auto text = readFile(path);
     if (!text) return Error{text.error().message + " (not a sweep output directory)"};
     auto parsed = parseSweepRows(text.value(), path);
     if (!parsed) return parsed.error();
+    if (std::any_of(parsed.value().begin(), parsed.value().end(),
+                    [](const SweepRow& r) { return r.explore != "none"; }))
+      explored_dirs.push_back(dir);
     for (SweepRow& row : parsed.value()) {
       if (!grid) {
         grid = row.grid;
@@ -647,6 +706,9 @@ Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& d
       slots[index] = std::move(row);
     }
   }
+  // The explore rows' curves: every shard that holds an explore row has its curves.csv.
+  for (const std::string& dir : explored_dirs)
+    if (Status st = readShardCurves(dir, slots); !st) return st.error();
   if (!grid) return Error{"the shards hold no rows"};
   std::vector<SweepRow> rows;
   std::vector<size_t> missing;

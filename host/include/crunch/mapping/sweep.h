@@ -174,17 +174,18 @@ std::string sweepRowsJson(const std::vector<SweepRow>& rows);
 // are not kSweepColumns with their types.
 Result<std::vector<SweepRow>> parseSweepRows(const std::string& text, const std::string& source);
 
-// Joins the sweep.json of each of `shard_dirs` into one list of rows in grid order. Errors
-// (naming the directory): a directory without a sweep.json, rows of different grid fingerprints
-// or sizes, a grid point twice or a grid point missing.
+// Joins the sweep.json of each of `shard_dirs` into one list of rows in grid order, with the
+// explore rows' curves read back from each shard's curves.csv. Errors (naming the directory or
+// file): a directory without a sweep.json, rows of different grid fingerprints or sizes, a grid
+// point twice or a grid point missing; a shard with explore rows without its curves.csv, or a
+// curves.csv line that does not read or names a grid point its sweep.json lacks.
 Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& shard_dirs);
 
 // curves.csv's text (kCurveColumns): a header line and every explore row's curve points.
 std::string sweepCurvesCsv(const std::vector<SweepRow>& rows);
 
 // Writes out_dir/sweep.csv and out_dir/sweep.json (created if missing), each atomically, and
-// out_dir/curves.csv when a row is an explore run (explore != "none"). sweep-merge of explore
-// shards writes sweep.csv/json only (curves stay in each shard's curves.csv).
+// out_dir/curves.csv when a row is an explore run (explore != "none").
 Status writeSweepFiles(const std::vector<SweepRow>& rows, const std::string& out_dir);
 
 }  // namespace crunch
