@@ -364,8 +364,8 @@ Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
   c.options.title = exploreChartStem(h) + ": fused-map " + what + " against metres driven (mean of " +
                     std::to_string(runs) + " seeds; dashed: +-1 sd)";
   c.options.x_label = "metres driven";
-  c.options.y_label = "fused-map " + what + " (tables found" +
-                      std::string(f1 ? ", precision and recall)" : " / real tables)");
+  c.options.y_label = "fused-map " + what +
+                      std::string(f1 ? " (of precision and recall)" : " (tables found / real tables)");
   c.options.width_px = 1000;
   c.options.height_px = 620;
   c.options.x_min = 0.0;
