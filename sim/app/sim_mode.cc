@@ -3,6 +3,7 @@
 #include <chrono>
 #include <functional>
 #include <ostream>
+#include <sstream>
 
 #include "crunch/core/atomic_file.h"
 #include "crunch/mapping/map_io.h"
@@ -14,6 +15,42 @@
 namespace crunch::app {
 
 namespace {
+
+// --start x,y,theta.
+Result<Pose2> parseStart(const std::string& text) {
+  Pose2 p;
+  char c1 = 0, c2 = 0;
+  std::istringstream in(text);
+  if (!(in >> p.x >> c1 >> p.y >> c2 >> p.theta) || c1 != ',' || c2 != ',' || !(in >> std::ws).eof()) {
+    return Error{"--start " + text + ": expected x,y,theta (metres, metres, radians)"};
+  }
+  return p;
+}
+
+// --explore and its flags; nullopt without --explore. An Error names the flag.
+Result<std::optional<exploration::ExploreOptions>> exploreOptions(const SimOptions& opt) {
+  if (!opt.explore) {
+    if (opt.teleport) return Error{"--teleport: needs --explore POLICY"};
+    if (opt.travel_budget) return Error{"--travel-budget: needs --explore POLICY"};
+    if (opt.whisk_budget) return Error{"--whisk-budget: needs --explore POLICY"};
+    if (opt.start) return Error{"--start: needs --explore POLICY"};
+    return std::optional<exploration::ExploreOptions>{};
+  }
+  exploration::ExploreOptions e;
+  auto kind = exploration::explorePolicyByName(*opt.explore);
+  if (!kind) return kind.error();
+  e.policy = kind.value();
+  e.teleport = opt.teleport;
+  if (opt.travel_budget) e.travel_budget_m = *opt.travel_budget;
+  if (opt.whisk_budget) e.whisk_budget = *opt.whisk_budget;
+  if (opt.start) {
+    auto start = parseStart(*opt.start);
+    if (!start) return start.error();
+    e.start = start.value();
+  }
+  if (auto st = e.validate(); !st) return st.error();
+  return std::optional<exploration::ExploreOptions>{e};
+}
 
 // The library's run options from the command line's; an Error names the option.
 Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
@@ -30,6 +67,9 @@ Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
   o.chain_fusion_given = opt.chain_fusion_given;
   o.snapshot_pose = opt.snapshot_pose;
   o.snapshot_temperature = opt.snapshot_temperature;
+  auto explore = exploreOptions(opt);
+  if (!explore) return explore.error();
+  o.explore = explore.value();
   return o;
 }
 
@@ -40,6 +80,11 @@ Status writeOutputs(const SimOptions& opt, const sim::SimScene& scene, const sim
   const std::string dir = opt.out_dir + "/";
   RenderOptions render;
   render.title = "crunchhost --sim, noise " + run.noise.name + ", seed " + std::to_string(opt.seed);
+  if (run.exploration) {
+    render.exploration = &*run.exploration;
+    render.title += ", --explore " + run.exploration->policy +
+                    (run.exploration->teleport ? " --teleport" : " (driven)");
+  }
   const std::function<Status()> writes[] = {
       [&] { return writeFileAtomic(dir + "map.json", mapToJson(run.map)); },
       [&] { return renderMapPng(run.map, scene.scene, dir + "map.png", render); },
@@ -68,6 +113,12 @@ void printSummary(const SimOptions& opt, const sim::SimScene& scene, const sim::
     return;
   }
   const std::string dir = opt.out_dir + "/";
+  if (run.exploration) {
+    const auto& x = *run.exploration;
+    out << "explored (" << x.policy << (x.teleport ? ", teleported" : ", driven") << "): "
+        << x.travel_m << " m, " << x.whisks << " whisks, " << x.bumps << " bumps, "
+        << x.sim_time_s << " s simulated; stopped: " << x.stop_reason << "\n";
+  }
   out << "mapped " << scene.scene.source << ": " << st.poses << " poses (" << st.skipped_poses
       << " skipped), " << st.shapelets << " shapelets, " << run.map.tables.size()
       << " tables in the fused map\n"

@@ -36,6 +36,14 @@ struct SimOptions {
   // annealing (0 the hottest, beta = 1 ... schedule_steps - 1 the coldest; paper Fig. 4 is a
   // hot one) instead of at its end. Needs --snapshot; out of range: exit 2, nothing written.
   std::optional<int> snapshot_temperature;
+  // --explore POLICY [--teleport] [--travel-budget M] [--whisk-budget N] [--start x,y,theta]
+  // (docs/EXPLORATION.md): the robot chooses where to whisk. Unset: the scene's pose list,
+  // teleported, as before. The budget and start flags need --explore; the library validates.
+  std::optional<std::string> explore;
+  bool teleport = false;
+  std::optional<double> travel_budget;
+  std::optional<int> whisk_budget;
+  std::optional<std::string> start;
 };
 
 // Exit codes: 0 success; 2 bad input (scene, option) with nothing written; 1 failure to write.

@@ -3,6 +3,7 @@
 #include "crunch/mapping/run_mapping.h"
 #include "crunch/render/blackboard_snapshot.h"
 #include "crunch/signal/models_io.h"
+#include "crunch_sim/explore_run.h"
 #include "crunch_sim/ray_sensor.h"
 
 namespace crunch::sim {
@@ -133,6 +134,12 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
                                                 RaySensorModel::Options{});
     }
   }
+  if (o.explore) {
+    if (auto st = o.explore->validate(); !st) return st.error();
+    if (o.snapshot_pose) {
+      return Error{"--snapshot: not with --explore (the whisk poses are not known before the run)"};
+    }
+  }
   if (auto st = checkSnapshot(o, scene.poses.size()); !st) return st.error();
   SensorModel& chosen = physics ? *physics_sensor : *sensor;
   std::optional<LockedSensor> locked;
@@ -151,7 +158,14 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
     recorder->install(mopt);
   }
   SensorModel& used = locked ? static_cast<SensorModel&>(*locked) : chosen;
-  run.map = runMapping(used, scene.poses, scene.skipped, mopt).value();  // validated above
+  if (o.explore) {
+    auto explored = runExploration(scene, used, mopt, *o.explore, o.world_mutex);
+    if (!explored) return explored.error();
+    run.map = std::move(explored.value().map);
+    run.exploration = std::move(explored.value().report);
+  } else {
+    run.map = runMapping(used, scene.poses, scene.skipped, mopt).value();  // validated above
+  }
   run.model = mopt.model;
   run.evaluation = evaluate(run.map, scene.scene, matchToleranceFor(mopt.model));
   if (mopt.model.walled()) run.evaluation.walls = evaluateWalls(run.map, scene.scene);

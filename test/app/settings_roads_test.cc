@@ -65,6 +65,19 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
   expectRefused("--sim", c);
 }
 
+TEST_CASE("Settings: a bad --explore setting is exit 2, named, nothing written", "[settings]") {
+  const Case c = GENERATE(Case{"--explore spiral", "--explore: unknown policy 'spiral'"},
+                          Case{"--explore random --travel-budget -1", "--travel-budget -1"},
+                          Case{"--explore random --travel-budget nan", "--travel-budget nan"},
+                          Case{"--explore grid --whisk-budget -2", "--whisk-budget -2"},
+                          Case{"--travel-budget 5", "--travel-budget: needs --explore"},
+                          Case{"--explore random --start 1,2", "--start 1,2: expected x,y,theta"},
+                          Case{"--explore random --start 9,9,0", "outside the arena"},
+                          // The body (radius 0.165) centred 5 cm from two boundary walls.
+                          Case{"--explore frontier --start 0.05,0.05,0", "inside an obstacle"});
+  expectRefused("--sim", c);
+}
+
 TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing written",
           "[settings]") {
   const Case c = GENERATE(Case{"--working-memory 7,0", "working_memory"},

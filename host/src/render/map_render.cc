@@ -301,8 +301,10 @@ std::vector<Vec2> uniquePositions(const std::vector<Pose2>& poses) {
 
 // Robot positions, like the paper's Fig. 6: the scene's planned poses in grey, and in black the
 // poses whose contacts were inferred from (map.per_pose).
-void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth) {
-  for (const Vec2& pos : uniquePositions(truth.poses)) p.dotPath(pos, kPoseDotRadius);
+void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth, bool planned) {
+  if (planned) {
+    for (const Vec2& pos : uniquePositions(truth.poses)) p.dotPath(pos, kPoseDotRadius);
+  }
   p.colour(kPlannedPoseDot);
   cairo_fill(p.cr());
   std::vector<Pose2> inferred;
@@ -310,6 +312,49 @@ void drawPoseGrid(const Painter& p, const Map& map, const Scene& truth) {
   for (const Vec2& pos : uniquePositions(inferred)) p.dotPath(pos, kPoseDotRadius);
   p.colour(kPoseDot);
   cairo_fill(p.cr());
+}
+
+// An exploration run: the driven path, each whisk pose as a small arrow on its heading, and
+// each bump as an x.
+constexpr Rgb kPath{0.10, 0.35, 0.85};
+constexpr Rgb kBump{0.90, 0.45, 0.0};
+constexpr double kPathWidth = 1.0;
+constexpr double kArrowLength = 0.08;  // metres
+constexpr double kBumpSize = 0.04;     // metres, half the x's arm
+
+void drawExploration(const Painter& p, const exploration::ExplorationReport& x) {
+  cairo_t* cr = p.cr();
+  cairo_set_line_width(cr, kPathWidth);
+  p.colour(kPath, 0.8);
+  for (std::size_t i = 0; i < x.path.size(); ++i) {
+    const Vec2 q = x.path[i].position();
+    if (!q.allFinite()) continue;
+    if (i == 0) p.moveTo(q); else p.lineTo(q);
+  }
+  cairo_stroke(cr);
+  cairo_set_line_width(cr, 1.5);
+  p.colour(kPath);
+  for (const Pose2& w : x.whisk_poses) {
+    const Vec2 a = w.position();
+    const Vec2 d(std::cos(w.theta), std::sin(w.theta));
+    const Vec2 n(-d.y(), d.x());
+    const Vec2 tip = a + kArrowLength * d;
+    p.moveTo(a);
+    p.lineTo(tip);
+    p.moveTo(tip - 0.03 * d + 0.02 * n);
+    p.lineTo(tip);
+    p.lineTo(tip - 0.03 * d - 0.02 * n);
+  }
+  cairo_stroke(cr);
+  cairo_set_line_width(cr, 2.0);
+  p.colour(kBump);
+  for (const Vec2& b : x.bump_points) {
+    p.moveTo(b + Vec2(-kBumpSize, -kBumpSize));
+    p.lineTo(b + Vec2(kBumpSize, kBumpSize));
+    p.moveTo(b + Vec2(-kBumpSize, kBumpSize));
+    p.lineTo(b + Vec2(kBumpSize, -kBumpSize));
+  }
+  cairo_stroke(cr);
 }
 
 // A table hypothesis as an outline of its top and its four legs.
@@ -368,7 +413,10 @@ void drawFusedTables(const Painter& p, const Map& map) {
 std::string titleLine(const Map& map, const Scene& truth, const RenderOptions& options) {
   std::size_t per_pose_tables = 0;
   for (const PoseMap& pm : map.per_pose) per_pose_tables += pm.tables.size();
-  const std::size_t poses = truth.poses.size();
+  // An exploration run whisked where it chose: its whisks are its poses, not the scene's list.
+  const std::size_t poses = options.exploration
+                                ? static_cast<std::size_t>(options.exploration->whisks)
+                                : truth.poses.size();
   std::string line = options.title.empty() ? std::string() : options.title + "   ";
   line += std::to_string(truth.tables.size()) + " true tables | " + std::to_string(poses) +
           " poses (" + std::to_string(map.per_pose.size()) + " with contacts) | " +
@@ -478,6 +526,26 @@ void drawLegend(const Painter& p, const RenderOptions& options, bool fused_walls
       label("fused walls");
     }
   }
+  if (options.exploration) {
+    cairo_set_line_width(cr, 1.5);
+    p.colour(kPath);
+    cairo_move_to(cr, x0, y + 0.5 * icon_h);
+    cairo_line_to(cr, x0 + icon_w, y + 0.5 * icon_h);
+    cairo_move_to(cr, x0 + icon_w - 6, y + 0.5 * icon_h - 4);
+    cairo_line_to(cr, x0 + icon_w, y + 0.5 * icon_h);
+    cairo_line_to(cr, x0 + icon_w - 6, y + 0.5 * icon_h + 4);
+    cairo_stroke(cr);
+    label("path, whisk poses");
+    cairo_set_line_width(cr, 2.0);
+    p.colour(kBump);
+    const double cx = x0 + 0.5 * icon_w, cy = y + 0.5 * icon_h;
+    cairo_move_to(cr, cx - 5, cy - 5);
+    cairo_line_to(cr, cx + 5, cy + 5);
+    cairo_move_to(cr, cx - 5, cy + 5);
+    cairo_line_to(cr, cx + 5, cy - 5);
+    cairo_stroke(cr);
+    label("bumps");
+  }
 }
 
 void drawPicture(cairo_t* cr, const MapCanvas& canvas, const Map& map, const Scene& truth,
@@ -490,11 +558,13 @@ void drawPicture(cairo_t* cr, const MapCanvas& canvas, const Map& map, const Sce
   if (options.draw_per_pose) drawPerPoseTables(p, map);
   p.restore();
   drawWalls(p, truth);
-  drawPoseGrid(p, map, truth);
+  // An exploration run draws its own path and whisk poses; the scene's list is not its plan.
+  drawPoseGrid(p, map, truth, options.exploration == nullptr);
   p.clipToArena();
   if (options.draw_fused) drawFusedTables(p, map);
   // Shapelets last: they are the evidence, small, and would vanish under the fused legs.
   if (options.draw_shapelets) drawShapelets(p, map);
+  if (options.exploration) drawExploration(p, *options.exploration);
   p.restore();
   // Walls over the shapelets (a wall is a line; its shapelets show at its sides), unclipped:
   // the boundary lies on the clip.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,13 @@ struct ExploreOptions {
   PolicyOptions policy_options;
   PlannerOptions planner;
   double cell = 0.05;            // KnownSpace cell, metres; 0.01..0.5
+  // --start x,y,theta: where the run begins (checked against the world by the run: inside an
+  // obstacle or outside the region is an Error naming --start). nullopt: the run's default.
+  std::optional<Pose2> start;
+  // Posterior draws for policies that want them (Mapper::drawSamples): inverse temperature and
+  // sweeps between draws.
+  double sample_beta = 1.0;      // > 0
+  int sample_sweeps = 4;         // >= 1
 
   // okStatus(), or an Error naming the flag: "--travel-budget -1: ...", "--whisk-budget ...".
   Status validate() const;
@@ -40,6 +48,7 @@ struct CurvePoint {
 // report.json `exploration`.
 struct ExplorationReport {
   std::string policy;
+  bool teleport = false;          // --teleport: travel is the straight-line distance
   double travel_m = 0.0;
   int whisks = 0;
   int bumps = 0;
@@ -52,5 +61,13 @@ struct ExplorationReport {
   std::vector<Pose2> whisk_poses; // where each whisk began
   std::vector<Vec2> bump_points;  // where the bumper hit
 };
+
+// One decision: the costmap over `known`, the distance field from the robot, then the policy.
+// `decision_ms` receives the wall time of the whole (costmap, field, policy), milliseconds.
+Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOptions& planner,
+                const Pose2& robot, std::span<const MapSample> samples,
+                const std::vector<WhiskerMount>& mounts, const ModelParams& model,
+                std::span<const Pose2> grid_poses, int whisks, double travel_m, bool teleport,
+                Rng& rng, double* decision_ms);
 
 }  // namespace crunch::exploration

@@ -51,11 +51,14 @@ class Costmap {
 struct PathPlan {
   std::vector<Vec2> waypoints;  // from the start (excluded) to the goal (included)
   double length = 0.0;          // metres along the waypoints
+  // The search's cost-weighted length of the cell path before shortening (unknown cells count
+  // unknown_cost per metre): what DistanceField::to(goal) gives for the same start.
+  double cost = 0.0;
 };
 
 // The shortest path from `from` to `to` on the costmap, or nullopt when the goal is blocked or
 // unreachable. A start inside an inflated obstacle (after a bump) may leave it by the shortest
-// way out.
+// way out that crosses no occupied cell.
 std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const Vec2& to);
 
 // Path cost from one start to every cell (Dijkstra on the same graph as planPath).

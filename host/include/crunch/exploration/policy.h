@@ -50,6 +50,9 @@ struct ExploreState {
   std::span<const Pose2> grid_poses;    // the scene's pose list (grid policy)
   int whisks = 0;                       // whisks done so far
   double travel_m = 0.0;                // metres driven so far
+  // --teleport: the robot jumps to the goal (the paper's idealisation), so a goal need not be
+  // reachable by a path; the grid policy then visits every pose of the list, as the paper did.
+  bool teleport = false;
 };
 
 struct Decision {

@@ -18,6 +18,7 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
+#include "crunch/exploration/exploration.h"
 #include "crunch/mapping/map.h"
 #include "crunch/scene/scene.h"
 
@@ -29,6 +30,9 @@ struct RenderOptions {
   bool draw_per_pose = true;  // the collated per-pose MAP tables (Figs. 11-13)
   bool draw_fused = true;     // the fused map (Map::tables)
   std::string title;          // shown before the counts on the title line; may be empty
+  // An exploration run (--explore): its driven path (thin line), whisk poses (small arrows) and
+  // bumps (x) are drawn over the map. Not owned; null: none.
+  const exploration::ExplorationReport* exploration = nullptr;
 };
 
 // Where the arena lands in the picture. The arena occupies width*ppm x depth*ppm pixels (SVG:

@@ -1,0 +1,216 @@
+#include "crunch/exploration/path_planner.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <string>
+
+namespace crunch::exploration {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+
+// The cost of moving from cell a to its neighbour b (step length `step` metres): each half of
+// the step is charged at its cell's rate, unknown_cost in unknown cells, 1 in free ones.
+double stepCost(const Costmap& cm, int ax, int ay, int bx, int by, double step) {
+  const auto rate = [&](int x, int y) {
+    return cm.known().at(x, y) == KnownSpace::Cell::kUnknown ? cm.options().unknown_cost : 1.0;
+  };
+  return 0.5 * step * (rate(ax, ay) + rate(bx, by));
+}
+
+struct Node {
+  double f;
+  int index;
+  bool operator>(const Node& o) const { return f > o.f || (f == o.f && index > o.index); }
+};
+
+// A* (heuristic on) or Dijkstra (off) from `from` over the costmap. Moves from a free cell into
+// a blocked one are not allowed; moves out of a blocked cell are (a start inside an inflated
+// obstacle leaves it by the cheapest way), but never into an occupied cell. Fills dist and parent; returns the start index or -1.
+int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& dist,
+           std::vector<int>& parent) {
+  const KnownSpace& k = cm.known();
+  const int nx = k.nx(), ny = k.ny();
+  dist.assign(static_cast<std::size_t>(nx) * ny, kInf);
+  parent.assign(dist.size(), -1);
+  int sx, sy;
+  if (!k.index(from, sx, sy)) return -1;
+  const int start = sy * nx + sx;
+  const double c = k.cell();
+  const int gx = goal >= 0 ? goal % nx : 0, gy = goal >= 0 ? goal / nx : 0;
+  const auto h = [&](int x, int y) {
+    if (goal < 0) return 0.0;
+    const double dx = std::abs(x - gx), dy = std::abs(y - gy);
+    return c * (std::max(dx, dy) + (std::sqrt(2.0) - 1.0) * std::min(dx, dy));  // octile
+  };
+  std::priority_queue<Node, std::vector<Node>, std::greater<Node>> open;
+  dist[start] = 0.0;
+  open.push({h(sx, sy), start});
+  while (!open.empty()) {
+    const Node n = open.top();
+    open.pop();
+    const int x = n.index % nx, y = n.index / nx;
+    if (n.f > dist[n.index] + h(x, y) + 1e-12) continue;  // stale entry
+    if (n.index == goal) break;
+    const bool here_blocked = cm.blocked(x, y);
+    for (int d = 0; d < 8; ++d) {
+      const int jx = x + kDx[d], jy = y + kDy[d];
+      if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
+      const bool there_blocked = cm.blocked(jx, jy);
+      if (there_blocked && !here_blocked) continue;
+      // Leaving an inflated zone never goes through the obstacle itself.
+      if (k.at(jx, jy) == KnownSpace::Cell::kOccupied) continue;
+      // No corner cutting: a diagonal step needs both side cells passable.
+      if (d >= 4 && !here_blocked && (cm.blocked(x + kDx[d], y) || cm.blocked(x, y + kDy[d]))) continue;
+      const int j = jy * nx + jx;
+      const double nd = dist[n.index] + stepCost(cm, x, y, jx, jy, d >= 4 ? c * std::sqrt(2.0) : c);
+      if (nd < dist[j]) {
+        dist[j] = nd;
+        parent[j] = n.index;
+        open.push({nd + h(jx, jy), j});
+      }
+    }
+  }
+  return start;
+}
+
+// True if the straight segment a-b crosses no blocked cell (sampled at a quarter cell).
+bool lineOfSight(const Costmap& cm, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
+  const int n = static_cast<int>(std::ceil(d.norm() / (0.25 * cm.known().cell()))) + 1;
+  for (int k = 0; k <= n; ++k) {
+    if (cm.blocked(a + d * (static_cast<double>(k) / n))) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Status PlannerOptions::validate() const {
+  if (!std::isfinite(robot_radius) || robot_radius <= 0) {
+    return Error{"planner robot_radius " + std::to_string(robot_radius) + ": must be above 0"};
+  }
+  if (!std::isfinite(margin) || margin < 0) {
+    return Error{"planner margin " + std::to_string(margin) + ": must be 0 or more"};
+  }
+  if (!std::isfinite(unknown_cost) || unknown_cost < 1) {
+    return Error{"planner unknown_cost " + std::to_string(unknown_cost) + ": must be 1 or more"};
+  }
+  return okStatus();
+}
+
+Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
+    : known_(known), options_(options) {
+  const int nx = known.nx(), ny = known.ny();
+  const double c = known.cell();
+  blocked_.assign(static_cast<std::size_t>(nx) * ny, 0);
+  const double r = options.robot_radius + options.margin;
+  // Minkowski inflation: a cell is blocked when its centre is within r of an occupied cell's
+  // centre, or within r of the region's edge (the robot is told the room's extent: its walls).
+  const int k = static_cast<int>(std::ceil(r / c));
+  std::vector<std::pair<int, int>> disc;
+  for (int dy = -k; dy <= k; ++dy) {
+    for (int dx = -k; dx <= k; ++dx) {
+      if (std::hypot(dx * c, dy * c) <= r) disc.emplace_back(dx, dy);
+    }
+  }
+  for (int y = 0; y < ny; ++y) {
+    for (int x = 0; x < nx; ++x) {
+      const Vec2 p = known.centre(x, y);
+      const Vec2 lo = known.lo(), hi = known.hi();
+      if (p.x() - lo.x() < r || hi.x() - p.x() < r || p.y() - lo.y() < r || hi.y() - p.y() < r) {
+        blocked_[y * nx + x] = 1;
+      }
+      if (known.at(x, y) != KnownSpace::Cell::kOccupied) continue;
+      for (const auto& [dx, dy] : disc) {
+        const int jx = x + dx, jy = y + dy;
+        if (jx >= 0 && jy >= 0 && jx < nx && jy < ny) blocked_[jy * nx + jx] = 1;
+      }
+    }
+  }
+}
+
+bool Costmap::blocked(int ix, int iy) const {
+  if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return true;
+  return blocked_[iy * known_.nx() + ix] != 0;
+}
+
+bool Costmap::blocked(const Vec2& p) const {
+  int ix, iy;
+  if (!known_.index(p, ix, iy)) return true;
+  return blocked(ix, iy);
+}
+
+std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const Vec2& to) {
+  const KnownSpace& k = costmap.known();
+  int gx, gy;
+  if (!k.index(to, gx, gy) || costmap.blocked(gx, gy)) return std::nullopt;
+  const int goal = gy * k.nx() + gx;
+  std::vector<double> dist;
+  std::vector<int> parent;
+  const int start = search(costmap, from, goal, dist, parent);
+  if (start < 0 || !std::isfinite(dist[goal])) return std::nullopt;
+  std::vector<int> cells;
+  for (int i = goal; i != start; i = parent[i]) cells.push_back(i);
+  std::reverse(cells.begin(), cells.end());
+  PathPlan plan;
+  plan.cost = dist[goal];
+  const auto at = [&](int i) { return k.centre(i % k.nx(), i / k.nx()); };
+  // Line-of-sight shortening (the "string pulling" of grid paths): from each anchor, go straight
+  // to the farthest later cell it sees over the inflated grid. While the start is inside an
+  // inflated obstacle the raw cells are kept until the path leaves it.
+  std::vector<Vec2> pts;
+  std::size_t i = 0;
+  Vec2 anchor = from;
+  while (i < cells.size() && costmap.blocked(at(cells[i]))) {
+    pts.push_back(at(cells[i]));
+    anchor = pts.back();
+    ++i;
+  }
+  while (i < cells.size()) {
+    std::size_t best = i;
+    for (std::size_t j = cells.size(); j-- > i;) {
+      const Vec2 target = j + 1 == cells.size() ? to : at(cells[j]);
+      if (lineOfSight(costmap, anchor, target)) {
+        best = j;
+        break;
+      }
+    }
+    anchor = best + 1 == cells.size() ? to : at(cells[best]);
+    pts.push_back(anchor);
+    i = best + 1;
+  }
+  if (pts.empty()) pts.push_back(to);  // already in the goal's cell
+  pts.back() = to;
+  Vec2 prev = from;
+  for (const Vec2& p : pts) {
+    plan.length += (p - prev).norm();
+    prev = p;
+  }
+  plan.waypoints = std::move(pts);
+  return plan;
+}
+
+DistanceField::DistanceField(const Costmap& costmap, const Vec2& from) : costmap_(costmap) {
+  std::vector<int> parent;
+  if (search(costmap, from, -1, dist_, parent) < 0) {
+    dist_.assign(static_cast<std::size_t>(costmap.known().nx()) * costmap.known().ny(), kInf);
+  }
+}
+
+double DistanceField::to(int ix, int iy) const {
+  if (costmap_.blocked(ix, iy)) return kInf;
+  return dist_[iy * costmap_.known().nx() + ix];
+}
+
+double DistanceField::to(const Vec2& p) const {
+  int ix, iy;
+  if (!costmap_.known().index(p, ix, iy)) return kInf;
+  return to(ix, iy);
+}
+
+}  // namespace crunch::exploration

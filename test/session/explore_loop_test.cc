@@ -1,0 +1,136 @@
+// The explore loop (crunch/session/explore_loop.h) driving the simulator's KinematicBase in
+// simulated time: it reaches the policy's goal and whisks there; a bump against a leg it did not
+// know replans around it; the whisk budget ends the run and says so.
+#include "crunch/session/explore_loop.h"
+
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "crunch_sim/kinematic_base.h"
+#include "crunch_sim/world.h"
+
+using namespace crunch;
+using namespace crunch::session;
+using crunch::exploration::KnownSpace;
+
+namespace {
+
+constexpr double kDt = 0.02;  // s of simulated time per control step
+
+// A policy with a fixed list of goals, then "done".
+class ListPolicy final : public exploration::ExplorePolicy {
+ public:
+  explicit ListPolicy(std::vector<Pose2> goals) : goals_(std::move(goals)) {}
+  exploration::ExplorePolicyKind kind() const override { return exploration::ExplorePolicyKind::kGrid; }
+  exploration::Decision next(const exploration::ExploreState&, Rng&) override {
+    if (i_ >= goals_.size()) return {std::nullopt, "list done", 0.0};
+    return {goals_[i_++], "", 0.0};
+  }
+
+ private:
+  std::vector<Pose2> goals_;
+  std::size_t i_ = 0;
+};
+
+Scene room(std::vector<TableSpec> tables = {}) {
+  Scene s;
+  s.width = 4.0;
+  s.depth = 3.0;
+  s.tables = std::move(tables);
+  return s;
+}
+
+// Steps the loop and base until the loop finishes or `limit` simulated seconds pass.
+void run(ExploreLoop& loop, sim::KinematicBase& base, double limit) {
+  while (!loop.finished() && base.now() < limit) {
+    REQUIRE(loop.update(0));
+    base.step(kDt);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("ExploreLoop: drives to the goal, turns to its heading and whisks there", "[session]") {
+  const Scene scene = room();
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {0.6, 0.6, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  ListPolicy policy({{3.0, 2.2, kPi / 2}});
+  std::vector<Pose2> whisked;
+  ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
+                   ExploreLoop::Options{}, {.whisked = [&](const Pose2& p) { whisked.push_back(p); }, .samples = {}, .bump_point = {}});
+  run(loop, base, 200.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason == "list done");
+  REQUIRE(whisked.size() == 1);
+  CHECK((whisked[0].position() - Vec2(3.0, 2.2)).norm() < 0.05);       // waypoint tolerance
+  CHECK(std::abs(wrapPi(whisked[0].theta - kPi / 2)) < 0.05);          // heading tolerance
+  const double straight = std::hypot(3.0 - 0.6, 2.2 - 0.6);
+  CHECK(loop.report().travel_m >= straight - 0.05);
+  CHECK(loop.report().travel_m < straight + 0.2);  // open floor: near the straight line
+  CHECK(loop.report().bumps == 0);
+  CHECK(loop.report().whisks == 1);
+  // The whisk took its time: toward, away, back at pi/24 rad/s = 8 s, plus the drive.
+  CHECK(loop.report().sim_time_s > straight / 0.2 + 8.0 - 0.5);
+  CHECK(loop.report().path.size() > 20);  // recorded every 5 cm
+}
+
+TEST_CASE("ExploreLoop: a bump on an unknown leg is recorded and the path replanned around it",
+          "[session]") {
+  // A table whose leg sits on the straight line from start to goal.
+  TableSpec t;
+  t.pose = {2.0 + 0.5 * (t.width - t.leg), 1.5 + 0.5 * (t.depth - t.leg), 0.0};  // +x+y leg at (2, 1.5)
+  const Scene scene = room({t});
+  const auto world = sim::World::build(scene);
+  REQUIRE(world->bodyCollides({2.0, 1.5, 0}));
+  sim::KinematicBase base(*world, {.start = {0.5, 1.5, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  ListPolicy policy({{3.5, 1.5, 0.0}});
+  int whisks = 0;
+  ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
+                   ExploreLoop::Options{}, {.whisked = [&](const Pose2&) { ++whisks; }, .samples = {}, .bump_point = {}});
+  run(loop, base, 400.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().bumps >= 1);
+  REQUIRE_FALSE(loop.report().bump_points.empty());
+  CHECK((loop.report().bump_points[0] - Vec2(2.0, 1.5)).norm() < 0.06);  // on the leg's face
+  CHECK(known.at(loop.report().bump_points[0]) == KnownSpace::Cell::kOccupied);
+  CHECK(whisks == 1);
+  CHECK((base.odometry().position() - Vec2(3.5, 1.5)).norm() < 0.05);  // got there anyway
+  CHECK(loop.report().stop_reason == "list done");
+}
+
+TEST_CASE("ExploreLoop: the whisk budget ends the run and says so", "[session]") {
+  const Scene scene = room();
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {0.6, 0.6, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  ListPolicy policy({{1.0, 0.6, 0.0}, {1.5, 0.6, 0.0}, {2.0, 0.6, 0.0}});
+  ExploreLoop::Options o;
+  o.explore.whisk_budget = 2;
+  ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {}, o, {});
+  run(loop, base, 400.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().whisks == 2);
+  CHECK(loop.report().stop_reason == "whisk budget reached");
+}
+
+TEST_CASE("ExploreLoop: a robot boxed in ends the run cleanly and says why", "[session]") {
+  const Scene scene = room();
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {2.0, 1.5, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  // A ring of contacts 0.15 m around the robot: no cell it can reach is one it may stand on.
+  for (int i = 0; i < 120; ++i) {
+    const double a = 2 * kPi * i / 120;
+    known.markContact(Vec2(2.0, 1.5) + 0.15 * Vec2(std::cos(a), std::sin(a)));
+  }
+  auto policy = exploration::makeRandomPolicy(exploration::PolicyOptions{});
+  ExploreLoop loop(base, known, *policy, defaultWhiskerArray(), ModelParams{}, {},
+                   ExploreLoop::Options{}, {});
+  run(loop, base, 10.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason.find("boxed in") != std::string::npos);
+  CHECK(loop.report().whisks == 0);
+  CHECK(loop.report().travel_m == 0.0);
+}
