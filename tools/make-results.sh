@@ -22,6 +22,7 @@
 #       (default paper, as --sim; rooms for tables of any size) override the policies, the seed
 #       count, the scenes and the object model; `bash tools/make-results.sh --only explore` runs
 #       only this step.
+# (f) keeps its curves.csv (5 MB for 135 runs) in build/results/explore/all/, not in docs/.
 # The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
 # sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N] [--only explore]
 # (CRUNCHHOST_BIN=PATH: run that crunchhost and build nothing.)
@@ -97,7 +98,6 @@ PY
   done
   rm -rf "$IMG/explore"
   "$BIN" sweep-chart --in "$raw/all" --out "$IMG/explore"
-  cp "$raw/all/curves.csv" "$IMG/explore/curves.csv"
   echo "make-results (f): exploration in $(( $(date +%s) - t0 )) s; charts in $IMG/explore/"
 }
 
