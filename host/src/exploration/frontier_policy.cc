@@ -36,6 +36,14 @@ class FrontierPolicy final : public ExplorePolicy {
     if (static_cast<int>(attempted_.size()) != n) attempted_.assign(n, 0);
     stamp_.assign(n, 0);
     int stamp = 0;
+    // The countable frontier once per decision (the scans below read it many times).
+    front_.assign(n, 0);
+    for (int iy = 0; iy < k.ny(); ++iy) {
+      for (int ix = 0; ix < k.nx(); ++ix) {
+        const int i = iy * k.nx() + ix;
+        front_[i] = !attempted_[i] && k.frontier(ix, iy);
+      }
+    }
     double reach = 0.0;
     for (const WhiskerMount& m : s.mounts) reach = std::max(reach, m.base.norm() + m.length);
 
@@ -87,7 +95,7 @@ class FrontierPolicy final : public ExplorePolicy {
     const int r = static_cast<int>(std::ceil(reach / k.cell()));
     for (int iy = std::max(0, cy - r); iy <= std::min(k.ny() - 1, cy + r); ++iy) {
       for (int ix = std::max(0, cx - r); ix <= std::min(k.nx() - 1, cx + r); ++ix) {
-        if (!attempted_[iy * k.nx() + ix] && k.frontier(ix, iy)) return true;
+        if (front_[iy * k.nx() + ix]) return true;
       }
     }
     return false;
@@ -111,7 +119,7 @@ class FrontierPolicy final : public ExplorePolicy {
           stamp_[i] = stamp;
           if (mark) {
             attempted_[i] = 1;
-          } else if (!attempted_[i] && k.frontier(ix, iy)) {
+          } else if (front_[i]) {
             ++count;
           }
         }
@@ -122,6 +130,7 @@ class FrontierPolicy final : public ExplorePolicy {
 
   PolicyOptions options_;
   std::vector<std::uint8_t> attempted_;
+  std::vector<std::uint8_t> front_;  // countable frontier cells of this decision
   std::vector<int> stamp_;
   std::vector<Cand> positions_;
 };

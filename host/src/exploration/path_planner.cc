@@ -13,15 +13,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
 constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 
-// The cost of moving from cell a to its neighbour b (step length `step` metres): each half of
-// the step is charged at its cell's rate, unknown_cost in unknown cells, 1 in free ones.
-double stepCost(const Costmap& cm, int ax, int ay, int bx, int by, double step) {
-  const auto rate = [&](int x, int y) {
-    return cm.known().at(x, y) == KnownSpace::Cell::kUnknown ? cm.options().unknown_cost : 1.0;
-  };
-  return 0.5 * step * (rate(ax, ay) + rate(bx, by));
-}
-
 struct Node {
   double f;
   int index;
@@ -47,6 +38,23 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
     const double dx = std::abs(x - gx), dy = std::abs(y - gy);
     return c * (std::max(dx, dy) + (std::sqrt(2.0) - 1.0) * std::min(dx, dy));  // octile
   };
+  // Per-cell rate (unknown_cost in unknown cells, 1 in free ones) and flags, read once: the
+  // inner loop then touches plain arrays. A step is charged half at each end's rate.
+  const std::size_t n_cells = dist.size();
+  std::vector<float> rate(n_cells);
+  std::vector<std::uint8_t> flags(n_cells);  // bit 0: blocked, bit 1: occupied
+  for (int y = 0; y < ny; ++y) {
+    for (int x = 0; x < nx; ++x) {
+      const int i = y * nx + x;
+      const KnownSpace::Cell cell_state = k.at(x, y);
+      rate[i] = cell_state == KnownSpace::Cell::kUnknown ? static_cast<float>(cm.options().unknown_cost) : 1.0f;
+      flags[i] = static_cast<std::uint8_t>((cm.blocked(x, y) ? 1 : 0) |
+                                           (cell_state == KnownSpace::Cell::kOccupied ? 2 : 0));
+    }
+  }
+  const auto blockedAt = [&](int x, int y) {
+    return x < 0 || y < 0 || x >= nx || y >= ny || (flags[y * nx + x] & 1);
+  };
   std::priority_queue<Node, std::vector<Node>, std::greater<Node>> open;
   dist[start] = 0.0;
   open.push({h(sx, sy), start});
@@ -56,18 +64,19 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
     const int x = n.index % nx, y = n.index / nx;
     if (n.f > dist[n.index] + h(x, y) + 1e-12) continue;  // stale entry
     if (n.index == goal) break;
-    const bool here_blocked = cm.blocked(x, y);
+    const bool here_blocked = flags[n.index] & 1;
     for (int d = 0; d < 8; ++d) {
       const int jx = x + kDx[d], jy = y + kDy[d];
       if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
-      const bool there_blocked = cm.blocked(jx, jy);
+      const int j = jy * nx + jx;
+      const bool there_blocked = flags[j] & 1;
       if (there_blocked && !here_blocked) continue;
       // Leaving an inflated zone never goes through the obstacle itself.
-      if (k.at(jx, jy) == KnownSpace::Cell::kOccupied) continue;
+      if (flags[j] & 2) continue;
       // No corner cutting: a diagonal step needs both side cells passable.
-      if (d >= 4 && !here_blocked && (cm.blocked(x + kDx[d], y) || cm.blocked(x, y + kDy[d]))) continue;
-      const int j = jy * nx + jx;
-      const double nd = dist[n.index] + stepCost(cm, x, y, jx, jy, d >= 4 ? c * std::sqrt(2.0) : c);
+      if (d >= 4 && !here_blocked && (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) continue;
+      const double step = d >= 4 ? c * std::sqrt(2.0) : c;
+      const double nd = dist[n.index] + 0.5 * step * (double(rate[n.index]) + double(rate[j]));
       if (nd < dist[j]) {
         dist[j] = nd;
         parent[j] = n.index;
