@@ -168,6 +168,7 @@ TEST_CASE("Explore summaries: mean and sd over seeds on a common travel axis per
   REQUIRE(curves);
   REQUIRE(curves.value().size() == 4);
   CHECK(std::isnan(curves.value()[1].precision[0]));  // null precision (nothing mapped) read
+  CHECK(std::isnan(curves.value()[0].run_recall));     // no run_recall column: not known
   const auto all = exploreSummaries(curves.value(), 7, 0.9);  // axis 0, 1, ..., 6 m
   REQUIRE(all.size() == 2);
   const ExploreSummary& grid = all[0];
@@ -215,9 +216,9 @@ TEST_CASE("Explore summaries: mean and sd over seeds on a common travel axis per
   CHECK(std::isnan(half[1].mean_curve_travel_to_target));
   const std::string csv = exploreSummaryCsv(half);
   CHECK(csv.find("s.json,paper,realistic,grid,2,3.50,2.0,0.8000,") != std::string::npos);
-  CHECK(csv.find(",0.5,2,3.50,3.00\n") != std::string::npos);
+  CHECK(csv.find(",0.5,2,3.50,3.00,,,,\n") != std::string::npos);  // final maps not given
   CHECK(csv.find("s.json,paper,realistic,random,2,4.00,3.0,0.3750,") != std::string::npos);
-  CHECK(csv.find(",0.5,1,6.00,\n") != std::string::npos);  // the mean curve never reached 0.5
+  CHECK(csv.find(",0.5,1,6.00,,,,,\n") != std::string::npos);  // mean curve never reached 0.5
 }
 
 TEST_CASE("Explore curves: bad lines are errors naming the file, line and column",
@@ -260,11 +261,12 @@ TEST_CASE("Explore curves: bad lines are errors naming the file, line and column
 TEST_CASE("Explore curves: a run's travel after its last whisk extends the axis and its figures",
           "[sweep][explore]") {
   const std::string header = "scene,model,explore,noise,seed,travel_m,whisks,recall,precision,f1,"
-                             "run_travel_m\n";
-  // grid whisks at 1 m and stops at 2 m; random whisks at 1 m, then drives on to 8 m.
+                             "run_travel_m,run_recall,run_f1\n";
+  // grid whisks at 1 m and stops at 2 m; random whisks at 1 m, then drives on to 8 m. Their
+  // final maps (global inference) find more than the curves' snapshots.
   const auto curves = parseExploreCurves(header +
-                                             "s,paper,grid,realistic,1,1,1,0.5,1,0.6,2\n"
-                                             "s,paper,random,realistic,1,1,1,0.25,1,0.4,8\n",
+                                             "s,paper,grid,realistic,1,1,1,0.5,1,0.6,2,0.75,0.8\n"
+                                             "s,paper,random,realistic,1,1,1,0.25,1,0.4,8,0.5,0.6\n",
                                          "c.csv");
   REQUIRE(curves);
   CHECK(curves.value()[1].run_travel_m == 8.0);
@@ -274,7 +276,16 @@ TEST_CASE("Explore curves: a run's travel after its last whisk extends the axis 
   CHECK(all[0].recall_mean.back() == Approx(0.5));
   CHECK(all[0].final_travel_mean == Approx(2.0));
   CHECK(all[1].final_travel_mean == Approx(8.0));
-  CHECK_THAT(parseExploreCurves(header + "s,paper,grid,realistic,1,3,1,0.5,1,0.6,2\n", "c.csv")
+  CHECK(all[0].map_recall_mean == Approx(0.75));
+  CHECK(all[0].final_recall_mean == Approx(0.5));  // the curve's last, not the final map's
+  CHECK(all[1].map_f1_mean == Approx(0.6));
+  CHECK(all[1].map_recall_sd == 0.0);  // one seed
+  CHECK_THAT(parseExploreCurves(header + "s,paper,grid,realistic,1,1,1,0.5,1,0.6,2,1.5,0.8\n",
+                                "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("run_recall"));
+  CHECK_THAT(parseExploreCurves(header + "s,paper,grid,realistic,1,3,1,0.5,1,0.6,2,0.5,0.5\n", "c.csv")
                  .error()
                  .message,
              Catch::Contains("run_travel_m") && Catch::Contains("below"));

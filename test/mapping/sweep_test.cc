@@ -280,9 +280,10 @@ TEST_CASE("Sweep curves.csv: one line per whisk of every explore row, written be
     lines.push_back(csv.substr(b, e - b));
   REQUIRE(lines.size() == 4);
   CHECK(lines[0] == "grid_index,scene,model,explore,noise,seed,whisk,travel_m,whisks,recall,"
-                    "precision,f1,run_travel_m");
-  CHECK(lines[1] == "0,default,paper,grid,ideal,1,0,0.5,1,0.0,null,0.0,1.5");
-  CHECK(lines[3].substr(lines[3].rfind(',')) == ",0.75");  // each line carries its run's travel
+                    "precision,f1,run_travel_m,run_recall,run_f1");
+  // Each line carries its run's travel and final map (rowAt: recall 1, F1 0.8).
+  CHECK(lines[1] == "0,default,paper,grid,ideal,1,0,0.5,1,0.0,null,0.0,1.5,1.0,0.8");
+  CHECK(lines[3].find(",0.75,1.0,0.8") != std::string::npos);
   CHECK(lines[2].rfind("0,default,paper,grid,ideal,1,1,1.5,2,0.5,1.0,0.6666", 0) == 0);
   // 13 = (random, ideal, 4 temperatures, seed 2)
   CHECK(lines[3].rfind("13,default,paper,random,ideal,2,0,0.75,1,0.25,0.5,0.333", 0) == 0);

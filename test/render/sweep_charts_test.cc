@@ -2,6 +2,7 @@
 #include "crunch/render/sweep_charts.h"
 
 #include <catch2/catch.hpp>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -120,6 +121,7 @@ TEST_CASE("exploreCharts: recall and F1 against travel per scene, one line per p
     s.final_recall_mean = 0.9;
     s.final_f1_mean = 0.8;
     s.mean_curve_travel_to_target = 2.0;
+    s.map_recall_mean = s.map_f1_mean = std::numeric_limits<double>::quiet_NaN();
     return s;
   };
   const std::vector<ExploreSummary> all = {summary("test/scenes/large_room.json", "grid", 2),
@@ -145,6 +147,17 @@ TEST_CASE("exploreCharts: recall and F1 against travel per scene, one line per p
   CHECK(set.report.find("explore large_room:") != std::string::npos);
   CHECK(set.summary_csv.find("test/scenes/large_room.json,paper,realistic,infogain,1,") !=
         std::string::npos);
+  // With the final maps known: a square per policy at its mean travel, sd as its bar.
+  std::vector<ExploreSummary> mapped = {all[0]};
+  mapped[0].map_recall_mean = 0.95;
+  mapped[0].map_recall_sd = 0.05;
+  mapped[0].map_f1_mean = 0.9;
+  const Chart with_map = exploreCharts(mapped).charts[0].second;
+  REQUIRE(with_map.series.size() == 5);
+  CHECK(with_map.series[4].x == std::vector<double>{2.0});
+  CHECK(with_map.series[4].y == std::vector<double>{0.95});
+  CHECK(with_map.series[4].y_error == std::vector<double>{0.05});
+  CHECK(with_map.series[1].label.find("final map 0.95") != std::string::npos);
   ExploreSummary rooms = all[0];
   rooms.model = "rooms";
   rooms.noise = "noisy";

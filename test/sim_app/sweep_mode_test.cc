@@ -343,7 +343,9 @@ TEST_CASE("sweep --explore: a row carries the run's travel and whisks, its curve
   CHECK(row["explore"] == "frontier");
   const auto curves = csvCells(slurp(sw.file("curves.csv")));
   REQUIRE(curves.size() >= 2);
-  CHECK(curves[0].back() == "run_travel_m");
+  CHECK(curves[0].back() == "run_f1");
+  CHECK(std::stod(curves.back()[13]) == Approx(row["recall"].get<double>()));  // run_recall
+  CHECK(std::stod(curves.back()[14]) == Approx(row["f1"].get<double>()));      // run_f1
   const int whisks = row["whisks"].get<int>();
   CHECK(whisks >= 1);
   CHECK(whisks <= 6);

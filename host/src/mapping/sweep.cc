@@ -42,7 +42,7 @@ const std::vector<std::string> kSweepColumns = {
 const std::vector<std::string> kCurveColumns = {
     "grid_index", "scene",    "model",  "explore", "noise",     "seed",
     "whisk",      "travel_m", "whisks", "recall",  "precision", "f1",
-    "run_travel_m"};
+    "run_travel_m", "run_recall", "run_f1"};
 
 namespace {
 
@@ -735,7 +735,8 @@ std::string sweepCurvesCsv(const std::vector<SweepRow>& rows) {
     for (size_t k = 0; k < r.curve.size(); ++k) {
       const SweepCurvePoint& p = r.curve[k];
       Json v = Json::array({r.grid_index, r.scene, r.model, r.explore, r.noise, r.seed, k,
-                            p.travel_m, p.whisks, p.recall, p.precision, p.f1, r.travel_m});
+                            p.travel_m, p.whisks, p.recall, p.precision, p.f1, r.travel_m,
+                            r.accuracy.recall, r.accuracy.f1});
       for (size_t c = 0; c < v.size(); ++c) {
         if (c) out += ',';
         out += csvField(v[c]);

@@ -325,6 +325,13 @@ Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
   std::optional<size_t> run_col;  // optional: curves.csv before the column
   if (const auto it = std::find(header.begin(), header.end(), "run_travel_m"); it != header.end())
     run_col = static_cast<size_t>(it - header.begin());
+  auto optionalColumn = [&](const char* name) -> std::optional<size_t> {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) return std::nullopt;
+    return static_cast<size_t>(it - header.begin());
+  };
+  const std::optional<size_t> recall_col = optionalColumn("run_recall");
+  const std::optional<size_t> f1_col = optionalColumn("run_f1");
   std::vector<ExploreCurve> curves;
   for (int n = 2; std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -376,6 +383,17 @@ Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
         return Error{where + ": column 'run_travel_m' must be a finite number >= 0, not '" + t +
                      "'"};
       it->run_travel_m = run;
+    }
+    for (const auto& [col_index, out] :
+         {std::pair<std::optional<size_t>, double*>{recall_col, &it->run_recall},
+          {f1_col, &it->run_f1}}) {
+      if (!col_index) continue;
+      double v = 0;
+      const std::string& t = f[*col_index];
+      if (!parseDouble(t, v) || !std::isfinite(v) || v < 0 || v > 1)
+        return Error{where + ": columns 'run_recall' and 'run_f1' must be numbers in [0, 1], not '" +
+                     t + "'"};
+      *out = v;
     }
     if (!it->travel_m.empty() && travel < it->travel_m.back())
       return Error{where + ": column 'travel_m' goes down within a run (" + fmt("%g", travel) +
@@ -462,10 +480,12 @@ std::vector<ExploreSummary> exploreSummaries(const std::vector<ExploreCurve>& cu
         s.f1_mean.push_back(mean(f));
         s.f1_sd.push_back(sd(f));
       }
-      std::vector<double> travel, whisks, recall, f1, reach;
+      std::vector<double> travel, whisks, recall, f1, reach, map_recall, map_f1;
       for (const ExploreCurve* c : runs) {
         const bool any = !c->travel_m.empty();
         travel.push_back(c->run_travel_m);
+        map_recall.push_back(c->run_recall);
+        map_f1.push_back(c->run_f1);
         whisks.push_back(any ? c->whisks.back() : 0.0);
         recall.push_back(any ? c->recall.back() : 0.0);
         f1.push_back(any ? c->f1.back() : 0.0);
@@ -478,6 +498,10 @@ std::vector<ExploreSummary> exploreSummaries(const std::vector<ExploreCurve>& cu
       s.final_recall_sd = sd(recall);
       s.final_f1_mean = mean(f1);
       s.final_f1_sd = sd(f1);
+      s.map_recall_mean = mean(map_recall);  // NaN when a run lacks it
+      s.map_recall_sd = sd(map_recall);
+      s.map_f1_mean = mean(map_f1);
+      s.map_f1_sd = sd(map_f1);
       s.reached = static_cast<int>(reach.size());
       s.travel_to_target_mean =
           reach.empty() ? std::numeric_limits<double>::quiet_NaN() : mean(reach);
@@ -492,7 +516,7 @@ std::string exploreSummaryCsv(const std::vector<ExploreSummary>& all) {
   std::ostringstream o;
   o << "scene,model,noise,explore,runs,run_travel_m_mean,whisks_mean,recall_mean,recall_sd,f1_mean,"
        "f1_sd,recall_target,seeds_reaching_target,travel_to_target_mean_m,"
-       "mean_curve_travel_to_target_m\n";
+       "mean_curve_travel_to_target_m,map_recall_mean,map_recall_sd,map_f1_mean,map_f1_sd\n";
   auto num = [](double v, const char* f) { return std::isfinite(v) ? fmt(f, v) : std::string(); };
   for (const ExploreSummary& s : all) {
     o << s.scene << "," << s.model << "," << s.noise << "," << s.explore << "," << s.runs << ","
@@ -501,7 +525,8 @@ std::string exploreSummaryCsv(const std::vector<ExploreSummary>& all) {
       << num(s.final_f1_mean, "%.4f") << "," << num(s.final_f1_sd, "%.4f") << ","
       << fmt("%g", s.recall_target) << "," << s.reached << ","
       << num(s.travel_to_target_mean, "%.2f") << "," << num(s.mean_curve_travel_to_target, "%.2f")
-      << "\n";
+      << "," << num(s.map_recall_mean, "%.4f") << "," << num(s.map_recall_sd, "%.4f") << ","
+      << num(s.map_f1_mean, "%.4f") << "," << num(s.map_f1_sd, "%.4f") << "\n";
   }
   return o.str();
 }

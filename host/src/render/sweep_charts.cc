@@ -362,7 +362,7 @@ Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
   for (const ExploreSummary& s : group) runs = std::max(runs, s.runs);
   const std::string what = f1 ? "F1" : "recall";
   c.options.title = exploreChartStem(h) + ": fused-map " + what + " against metres driven (mean of " +
-                    std::to_string(runs) + " seeds; dashed: +-1 sd)";
+                    std::to_string(runs) + " seeds; dashed: +-1 sd; square: final map)";
   c.options.x_label = "metres driven";
   c.options.y_label = "fused-map " + what +
                       std::string(f1 ? " (of precision and recall)" : " (tables found / real tables)");
@@ -400,10 +400,25 @@ Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
       lo.y.push_back(std::max(0.0, m[i] - d[i]));
       hi.y.push_back(std::min(1.0, m[i] + d[i]));
     }
+    const double map_mean = f1 ? s.map_f1_mean : s.map_recall_mean;
+    const double map_sd = f1 ? s.map_f1_sd : s.map_recall_sd;
+    if (std::isfinite(map_mean)) line.label += ", final map " + fmt("%.2f", map_mean);
     c.series.push_back(line);
     if (s.runs > 1) {
       c.series.push_back(lo);
       c.series.push_back(hi);
+    }
+    if (std::isfinite(map_mean)) {
+      // The final fused map (global inference at the end): a square at the run's mean travel.
+      ChartSeries end;
+      end.style = SeriesStyle::kPoints;
+      end.marker = MarkerShape::kSquare;
+      end.marker_size = 6.0;
+      end.colour = line.colour;
+      end.x = {s.final_travel_mean};
+      end.y = {map_mean};
+      end.y_error = {map_sd};
+      c.series.push_back(end);
     }
   }
   return c;

@@ -137,7 +137,8 @@ struct SweepCurvePoint {
 
 // The columns of curves.csv, in order: one line per curve point of every explore row, rows in
 // grid order, points in whisk order; run_travel_m is the row's travel_m (the run may drive on
-// after its last whisk).
+// after its last whisk), run_recall and run_f1 the row's recall and f1: the run's final fused map
+// (global inference at the end), which the curve's running snapshot does not include.
 extern const std::vector<std::string> kCurveColumns;
 
 // One row of sweep.csv / sweep.json (kSweepColumns, in order).

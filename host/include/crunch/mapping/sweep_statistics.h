@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -104,6 +105,9 @@ struct ExploreCurve {
   std::vector<int> whisks;
   // Metres the run drove in all (curves.csv run_travel_m; without the column, the last whisk's).
   double run_travel_m = 0.0;
+  // The run's final fused map (curves.csv run_recall, run_f1; NaN without the columns).
+  double run_recall = std::numeric_limits<double>::quiet_NaN();
+  double run_f1 = std::numeric_limits<double>::quiet_NaN();
 };
 
 // curves.csv's text into its runs, grouped by (scene, model, explore, noise, seed) in order of
@@ -136,6 +140,8 @@ struct ExploreSummary {
   double final_travel_mean = 0.0;  // run_travel_m
   double final_whisks_mean = 0.0;
   double final_recall_mean = 0.0, final_recall_sd = 0.0, final_f1_mean = 0.0, final_f1_sd = 0.0;
+  // The runs' final fused maps (run_recall, run_f1), mean and sd over seeds; NaN if not given.
+  double map_recall_mean = 0.0, map_recall_sd = 0.0, map_f1_mean = 0.0, map_f1_sd = 0.0;
   double recall_target = 0.9;
   int reached = 0;  // seeds whose recall reached the target
   // Mean over the seeds that reached it of the travel at which each first did (NaN: none did).

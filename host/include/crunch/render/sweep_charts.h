@@ -19,7 +19,9 @@
 //    curves.csv, exploreSummaries): the fused map's recall (F1) against metres driven, one line
 //    per exploration policy (mean over seeds, dashed lines at mean +-1 sample sd), one chart per
 //    scene (and model / noise regime other than paper / realistic: their names are appended).
-//    The recall chart marks the target recall 0.9.
+//    The recall chart marks the target recall 0.9; a square (+-1 sd) at each policy's
+//    mean travel marks its runs' final fused map (global inference at the end), when curves.csv
+//    has run_recall / run_f1.
 // Pure functions: nothing is written here.
 #pragma once
 
