@@ -361,8 +361,8 @@ Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
   int runs = 0;
   for (const ExploreSummary& s : group) runs = std::max(runs, s.runs);
   const std::string what = f1 ? "F1" : "recall";
-  c.options.title = exploreChartStem(h) + ": fused-map " + what + " against metres driven (mean of " +
-                    std::to_string(runs) + " seeds; dashed: +-1 sd; square: final map)";
+  c.options.title = exploreChartStem(h) + ": " + what + " against metres driven, mean of " +
+                    std::to_string(runs) + " seeds (dashed +-1 sd; square: final map)";
   c.options.x_label = "metres driven";
   c.options.y_label = "fused-map " + what +
                       std::string(f1 ? " (of precision and recall)" : " (tables found / real tables)");
@@ -388,7 +388,7 @@ Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
     const std::vector<double>& d = f1 ? s.f1_sd : s.recall_sd;
     ChartSeries line, lo, hi;
     line.label = s.explore + " (" + std::to_string(s.runs) + " seeds; drove " +
-                 fmt("%.1f", s.final_travel_mean) + " m, " + what + " " +
+                 fmt("%.1f", s.final_travel_mean) + " m; curve " +
                  fmt("%.2f", f1 ? s.final_f1_mean : s.final_recall_mean) + ")";
     line.style = lo.style = hi.style = SeriesStyle::kLine;
     line.colour = lo.colour = hi.colour = policyColour(s.explore);
