@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "crunch/exploration/policy.h"
 #include "robot_mode.h"
 #include "sim_mode.h"
 #include "sweep_chart.h"
@@ -261,10 +262,28 @@ int runTopLevel(TopLevel& t, RobotOptions& ropt) {
     return runReplay(rp, std::cout, std::cerr);
   }
   if (t.robot) {
-    if (opt.explore || opt.teleport || opt.travel_budget || opt.whisk_budget || opt.start) {
-      std::cerr << "crunchhost: --explore: not wired into --robot yet (the explore loop, "
-                   "session/explore_loop.h, drives the Create's MobileBase; its wiring into the "
-                   "robot's controller is issue 14's next step); use --sim --explore\n";
+    // --explore on the robot: the same policies and budgets as --sim (the library validates
+    // them, planRobot); a real robot cannot teleport, and its start is --start-x/-y/-theta.
+    if (opt.teleport || opt.start) {
+      std::cerr << "crunchhost: " << (opt.teleport ? "--teleport" : "--start")
+                << ": not with --robot (a real robot drives; its start pose in the map is "
+                   "--start-x, --start-y, --start-theta)\n";
+      return 2;
+    }
+    if (opt.explore) {
+      auto kind = crunch::exploration::explorePolicyByName(*opt.explore);
+      if (!kind) {
+        std::cerr << "crunchhost: " << kind.error().message << "\n";
+        return 2;
+      }
+      crunch::exploration::ExploreOptions e;
+      e.policy = kind.value();
+      if (opt.travel_budget) e.travel_budget_m = *opt.travel_budget;
+      if (opt.whisk_budget) e.whisk_budget = *opt.whisk_budget;
+      ropt.explore = e;
+    } else if (opt.travel_budget || opt.whisk_budget) {
+      std::cerr << "crunchhost: " << (opt.travel_budget ? "--travel-budget" : "--whisk-budget")
+                << ": needs --explore POLICY\n";
       return 2;
     }
     ropt.out_dir = opt.out_dir;

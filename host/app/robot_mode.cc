@@ -67,6 +67,12 @@ Result<RobotPlan> planRobot(const RobotOptions& opt) {
   c.calibrate_timeout_s = opt.calibrate_timeout_s;
   c.bridge = "the whisker bridge " + opt.usb;
   c.whisk = session::roamingWhiskOptions(opt.seed, s.mounts);
+  if (opt.explore) {
+    session::ExploreLoop::Options e;
+    e.explore = *opt.explore;
+    e.seed = opt.seed;
+    c.explore = e;
+  }
   if (auto st = c.validate(); !st) return Error{"--robot: " + st.error().message};
   return plan;
 }
@@ -128,7 +134,9 @@ Result<std::unique_ptr<io::RecordingWriter>> openRecording(const RobotOptions& o
 session::EventSink progressPrinter(bool json_progress, std::ostream& out) {
   return [json_progress, &out](const session::ControllerEvent& e) {
     if (json_progress) {
-      out << json{{"event", e.name}, {"t", e.t}, {"message", e.message}}.dump() << "\n";
+      json line{{"event", e.name}, {"t", e.t}, {"message", e.message}};
+      if (e.pose) line["pose"] = {e.pose->x, e.pose->y, e.pose->theta};
+      out << line.dump() << "\n";
     } else {
       out << "[" << static_cast<int>(e.t) << " s] " << e.message << "\n";
     }
@@ -163,13 +171,18 @@ json robotReport(const RobotSession& session, const Map& map, const session::Rob
                    {"reconnects", d.usb->reconnects()}};
   report["create_watchdog_stops"] = d.create->watchdogStops();
   if (recorder) report["recording"] = recorder->path();
+  // Exploring: the loop's report (no curve: the robot has no ground truth).
+  if (const session::ExploreLoop* x = c.explore()) {
+    report["exploration"] = json::parse(exploration::explorationJson(x->report()).dump());
+  }
   return report;
 }
 
 // map.json, map.png, then report.json; stops at the first failure. 0, or 1 with the error said.
 int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string& out_dir,
-                 const std::string& title, const json& report, std::ostream& err) {
-  Status st = session::writeMapFiles(map, s.area_hi, out_dir, title);
+                 const std::string& title, const json& report, std::ostream& err,
+                 const exploration::ExplorationReport* exploration = nullptr) {
+  Status st = session::writeMapFiles(map, s.area_hi, out_dir, title, exploration);
   if (st) st = writeFileAtomic(out_dir + "/report.json", report.dump(2) + "\n");
   if (!st) {
     err << "crunchhost: " << st.error().message << "\n";
@@ -219,7 +232,8 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
   if (!failure) report["error"] = failure.error().message;
   report["wall_s"] = secondsSince(t0);
   if (writeOutputs(map, p.session, opt.out_dir,
-                   "crunchhost --robot, seed " + std::to_string(opt.seed), report, err) != 0) {
+                   "crunchhost --robot, seed " + std::to_string(opt.seed), report, err,
+                   controller.explore() ? &controller.explore()->report() : nullptr) != 0) {
     return 1;
   }
   progress({"done", d.create->now(),

@@ -28,8 +28,10 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
+#include "crunch/exploration/exploration.h"
 #include "crunch/mapping/run_mapping.h"
 
 namespace crunch::app {
@@ -52,6 +54,9 @@ struct RobotOptions {
   bool checksum_includes_header = true;  // the Create 1's checksum quirk (docs/CREATE.md)
   bool json_progress = false;
   MappingOptions mapping;
+  // --explore POLICY [--travel-budget M] [--whisk-budget N]: the robot explores instead of
+  // roaming (session/controller.h ControllerOptions::explore); validated by planRobot.
+  std::optional<exploration::ExploreOptions> explore;
 };
 
 struct ReplayOptions {

@@ -45,20 +45,6 @@ nlohmann::ordered_json physicsJson(const PhysicsSummary& physics) {
             {"sense_and_infer_s", physics.gaussian_s}}}};
 }
 
-// report.json `exploration` (ARCHITECTURE.md §4, docs/EXPLORATION.md).
-nlohmann::ordered_json explorationJson(const exploration::ExplorationReport& x) {
-  nlohmann::ordered_json curve = nlohmann::ordered_json::array();
-  for (const exploration::CurvePoint& c : x.curve) {
-    curve.push_back({{"travel_m", c.travel_m}, {"whisks", c.whisks}, {"recall", c.recall},
-                     {"precision", c.precision}, {"f1", c.f1}});
-  }
-  return {{"policy", x.policy},         {"teleport", x.teleport},
-          {"travel_m", x.travel_m},     {"whisks", x.whisks},
-          {"bumps", x.bumps},           {"sim_time_s", x.sim_time_s},
-          {"decision_ms", x.decision_ms}, {"decision_ms_max", x.decision_ms_max},
-          {"stop_reason", x.stop_reason}, {"curve", curve}};
-}
-
 }  // namespace
 
 std::string simReportJson(const Scene& scene, const SimRun& run, const SimRunOptions& options,
@@ -74,7 +60,7 @@ std::string simReportJson(const Scene& scene, const SimRun& run, const SimRunOpt
   j["counts"] = mapCountsJson(run.map);
   j["timings_s"] = {{"sense_and_infer", run.map.stats.wall_s}, {"total", total_s}};
   if (run.physics) j["physics"] = physicsJson(*run.physics);
-  if (run.exploration) j["exploration"] = explorationJson(*run.exploration);
+  if (run.exploration) j["exploration"] = exploration::explorationJson(*run.exploration);
   j["model"] = modelJson(run.model);
   j["sampler"] = samplerJson(options.mapping);
   return j.dump(2) + "\n";

@@ -92,6 +92,19 @@ TEST_CASE(
     o.map_every_s = 0.0;
     field = "map_every_s";
   }
+  SECTION("--explore with a negative travel budget") {
+    exploration::ExploreOptions e;
+    e.policy = exploration::ExplorePolicyKind::kFrontier;
+    e.travel_budget_m = -1.0;
+    o.explore = e;
+    field = "--travel-budget";
+  }
+  SECTION("--explore with a negative whisk budget") {
+    exploration::ExploreOptions e;
+    e.whisk_budget = -3;
+    o.explore = e;
+    field = "--whisk-budget";
+  }
   std::ostringstream out, err;
   CHECK(app::runRobot(o, out, err) == 2);
   CHECK(err.str().find(field) != std::string::npos);

@@ -305,6 +305,68 @@ TEST_CASE("Robot: the virtual robot maps both tables of hil_two_tables within 5 
   mapsEveryTable(kTwoTables, kTwoTablesSeconds);
 }
 
+// `crunchhost --robot --explore POLICY` (issue 14): the robot drives to the whisk poses the
+// policy chose and whisks there. Read from the --json progress: each "goal" event carries the
+// pose the policy chose, each "whisk" event the pose where a whisk began (the session's
+// odometry). The whisks that followed a goal began at it: within the loop's tolerances (a
+// waypoint within 5 cm, the heading within 0.03 rad) plus the odometry's resolution; at least
+// one of them away from the start (the robot drove there). The report has the exploration block
+// without a curve (no ground truth on a robot), and the recording replays to the same map.
+void exploresToChosenPoses(const std::string& policy, int seconds) {
+  if (realHardware()) {
+    WARN("hil: real devices: exploring the real room is run by hand (docs/EXPLORATION.md)");
+    return;
+  }
+  TempDir dir;
+  const fs::path out = dir.path() / "live";
+  const Run r = virtualRobot("", "--explore " + policy + " --duration " + std::to_string(seconds) +
+                                     " --json --out " + out.string(),
+                             kTwoTables, 3 * seconds);
+  INFO(r.output);
+  REQUIRE(r.exit_code == 0);
+  crunch::Pose2 goal{};
+  bool goal_open = false;  // a goal whose whisk has not come yet
+  int goals = 0, at_goal = 0, away = 0;
+  const crunch::Vec2 start{0.35, 0.35};
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("{\"event\"", 0) != 0) continue;
+    const json e = json::parse(line);
+    if (!e.contains("pose")) continue;
+    const auto p = e["pose"].get<std::vector<double>>();
+    const crunch::Pose2 pose{p[0], p[1], p[2]};
+    if (e["event"] == "goal") {
+      ++goals;
+      goal = pose;
+      goal_open = true;
+    } else if (e["event"] == "whisk" && goal_open) {
+      const double d = std::hypot(pose.x - goal.x, pose.y - goal.y);
+      if (d < 0.06 && angleDiff(pose.theta, goal.theta) < 0.05) {
+        ++at_goal;
+        if (std::hypot(pose.x - start.x(), pose.y - start.y()) > 0.05) ++away;
+      }
+      goal_open = false;  // a whisk without a new goal in between was a touch on the way
+    }
+  }
+  std::cout << "hil: " << policy << ": " << goals << " goals, " << at_goal
+            << " whisks at the chosen pose, " << away << " of them away from the start"
+            << std::endl;
+  CHECK(goals >= 2);
+  CHECK(at_goal >= 2);
+  CHECK(away >= 1);
+  const json rep = readJson(out / "report.json");
+  REQUIRE(rep.contains("exploration"));
+  CHECK(rep["exploration"]["policy"] == policy);
+  CHECK(rep["exploration"]["whisks"].get<int>() >= at_goal);
+  CHECK(rep["exploration"]["curve"].empty());
+  checkReplaySameMap(out, dir.path() / "replay");
+}
+
+TEST_CASE("Robot: --explore infogain drives the virtual robot to the whisk poses it chose",
+          "[hil]") {
+  exploresToChosenPoses("infogain", 90);
+}
+
 TEST_CASE("Robot: the bridge unplugged mid-run stops the robot, keeps the map and resumes",
           "[hil]") {
   if (realHardware()) {  // unplugging is done by hand on the real robot (docs/ROBOT.md)

@@ -58,4 +58,19 @@ Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOpt
   return d;
 }
 
+// report.json `exploration` (ARCHITECTURE.md §4, docs/EXPLORATION.md).
+nlohmann::ordered_json explorationJson(const ExplorationReport& x) {
+  nlohmann::ordered_json curve = nlohmann::ordered_json::array();
+  for (const CurvePoint& c : x.curve) {
+    curve.push_back({{"travel_m", c.travel_m}, {"whisks", c.whisks}, {"recall", c.recall},
+                     {"precision", c.precision}, {"f1", c.f1}});
+  }
+  return {{"policy", x.policy},         {"teleport", x.teleport},
+          {"travel_m", x.travel_m},     {"whisks", x.whisks},
+          {"bumps", x.bumps},           {"sim_time_s", x.sim_time_s},
+          {"decision_ms", x.decision_ms}, {"decision_ms_max", x.decision_ms_max},
+          {"stop_reason", x.stop_reason}, {"curve", curve}};
+}
+
+
 }  // namespace crunch::exploration

@@ -1,5 +1,7 @@
 #include "crunch/session/controller.h"
 
+#include <cstdio>
+
 #include <utility>
 
 #include "crunch/core/range_check.h"
@@ -38,7 +40,8 @@ Status ControllerOptions::validate() const {
                            checkAbove("map_every_s", map_every_s, 0.0, 1e7),
                            checkAbove("calibrate_timeout_s", calibrate_timeout_s, 0.0, 1e7),
                            checkRange("poll_timeout_s", poll_timeout_s, 0.0, 1.0),
-                           within("whisk", whisk.validate())};
+                           within("whisk", whisk.validate()),
+                           explore ? within("explore", explore->validate()) : okStatus()};
   for (const Status& s : checks) {
     if (!s) return s;
   }
@@ -64,9 +67,18 @@ RobotController::RobotController(MobileBase& base, RobotSession& session,
       sources_(std::move(sources)),
       events_(std::move(events)),
       whisk_(base, options.whisk),
+      frame_base_(base, session),
       sink_([this](const io::Chunk& c) {
         if (auto s = session_.handle(c); !s) fail(s.error());
-      }) {}
+      }) {
+  if (options_.explore) {
+    const RobotSessionOptions& so = session_.options();
+    known_ = std::make_unique<exploration::KnownSpace>(so.area_lo, so.area_hi,
+                                                       options_.explore->explore.cell);
+    policy_ = exploration::makePolicy(options_.explore->explore.policy,
+                                      options_.explore->explore.policy_options);
+  }
+}
 
 void RobotController::fail(const Error& error) {
   if (failure_) failure_ = error;
@@ -136,6 +148,8 @@ bool RobotController::step() {
     if (!calibrating()) return false;
   } else if (stage_ == Stage::kRoaming) {  // not in the step that ended the calibration
     if (!roaming()) return false;
+  } else if (stage_ == Stage::kExploring) {
+    if (!exploring()) return false;
   }
 
   if (base_.now() >= next_map_s_) {
@@ -147,6 +161,7 @@ bool RobotController::step() {
     if (const std::uint64_t stops = sources_.watchdog_stops(); stops != watchdog_seen_) {
       watchdog_seen_ = stops;
       whisk_.commandLost();
+      if (explore_) explore_->commandLost();
       emit("watchdog",
            "the control loop stalled; the Create's watchdog stopped the motors; resuming");
     }
@@ -170,7 +185,19 @@ void RobotController::onLinkEvent(const LinkMonitor::Event& event) {
 }
 
 bool RobotController::calibrating() {
-  if (session_.calibrated()) {
+  if (session_.calibrated() && options_.explore) {
+    stage_ = Stage::kExploring;
+    if (explore_) {
+      explore_->commandLost();  // the pause stopped the base: send the command again
+      emit("exploring", "whiskers calibrated; exploring again");
+      return true;
+    }
+    startExploring();
+    std::string message = "whiskers calibrated; exploring with the ";
+    message += exploration::explorePolicyName(options_.explore->explore.policy);
+    message += " policy";
+    emit("exploring", message);
+  } else if (session_.calibrated()) {
     stage_ = Stage::kRoaming;
     if (auto s = whisk_.startRoaming(); !s) {
       fail(s.error());
@@ -219,6 +246,80 @@ bool RobotController::roaming() {
                       std::to_string(session_.counts().reports) + " reports so far");
   }
   return true;
+}
+
+namespace {
+std::string poseText(const Pose2& q) {
+  char text[96];
+  std::snprintf(text, sizeof text, "(%.3f, %.3f, %.3f)", q.x, q.y, q.theta);
+  return text;
+}
+}  // namespace
+
+void RobotController::startExploring() {
+  const ExploreLoop::Options& o = *options_.explore;
+  ExploreLoop::Hooks hooks;
+  hooks.whisked = [this](const Pose2& pose) { onWhisked(pose); };
+  hooks.samples = [this, beta = o.explore.sample_beta, sweeps = o.explore.sample_sweeps](
+                      int n, std::vector<MapSample>& out) {
+    session_.drawSamples(n, beta, sweeps, out);
+  };
+  // No bump_point: the Create's bumpers say only that the front hit something (the loop takes
+  // the body's front point on its heading).
+  explore_ = std::make_unique<ExploreLoop>(frame_base_, *known_, *policy_, session_.options().mounts,
+                                           session_.options().mapping.model,
+                                           std::vector<Pose2>{}, o, std::move(hooks));
+}
+
+bool RobotController::exploring() {
+  const int bumps = explore_->report().bumps;
+  if (auto s = explore_->update(session_.contactMask()); !s) {
+    fail(s.error());
+    return end("the Create refused a command");
+  }
+  if (explore_->report().bumps != bumps) {
+    emit("bump", "bumper at " + poseText(session_.pose()) + ": backing off and replanning");
+  }
+  const std::optional<Pose2>& goal = explore_->goal();
+  if (goal && (!announced_goal_ || announced_goal_->x != goal->x || announced_goal_->y != goal->y ||
+               announced_goal_->theta != goal->theta)) {
+    announced_goal_ = goal;
+    std::string message = "the ";
+    message += exploration::explorePolicyName(options_.explore->explore.policy);
+    message += " policy chose the whisk pose ";
+    message += poseText(*goal);
+    ControllerEvent e{"goal", base_.now(), std::move(message), *goal};
+    if (events_) events_(e);
+  }
+  // The loop's in-place whisk (at a goal, or where a whisker touched on the way) is one group
+  // for the mapper: opened here when it begins, closed by onWhisked when it ends.
+  const ExploreLoop::Phase phase = explore_->phase();
+  const bool whisking = phase == ExploreLoop::Phase::kWhisk ||
+                        phase == ExploreLoop::Phase::kTouchWhisk;
+  if (whisking && !whisk_open_) {
+    whisk_open_ = true;
+    if (auto s = session_.beginWhisk(nowNs()); !s) fail(s.error());
+  }
+  if (explore_->finished()) return end("exploration ended: " + explore_->report().stop_reason);
+  return true;
+}
+
+void RobotController::onWhisked(const Pose2& pose) {
+  if (!whisk_open_) return;  // a whisk the loop began in the same update: opened below it
+  whisk_open_ = false;
+  if (auto s = session_.endWhisk(nowNs()); !s) fail(s.error());
+  for (const FreeRay& r : session_.lastFreeRays()) known_->markFreeRay(r);
+  const Map snap = session_.snapshot();
+  for (std::size_t i = contacts_known_; i < snap.shapelets.size(); ++i) {
+    known_->markContact({snap.shapelets[i].x, snap.shapelets[i].y});
+  }
+  contacts_known_ = snap.shapelets.size();
+  known_->setMapObstacles(snap.tables, snap.walls);
+  ControllerEvent e{"whisk", base_.now(),
+                    "whisk " + std::to_string(session_.counts().whisks) + " at " + poseText(pose) +
+                        ": " + std::to_string(session_.counts().reports) + " reports so far",
+                    pose};
+  if (events_) events_(e);
 }
 
 }  // namespace crunch::session

@@ -13,7 +13,7 @@ namespace crunch::session {
 using json = nlohmann::json;
 
 Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out_dir,
-                     const std::string& title) {
+                     const std::string& title, const exploration::ExplorationReport* exploration) {
   if (auto st = ensureDirectory(out_dir); !st) return st;
   Scene area;  // the "truth" drawn is only the mapped area
   area.width = area_hi.x();
@@ -21,6 +21,7 @@ Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out
   area.source = "robot";
   RenderOptions ropt;
   ropt.title = title;
+  ropt.exploration = exploration;
   if (auto st = writeFileAtomic(out_dir + "/map.json", mapToJson(map)); !st) return st;
   return renderMapPng(map, area, out_dir + "/map.png", ropt);
 }

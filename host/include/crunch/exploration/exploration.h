@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
 #include "crunch/exploration/path_planner.h"
@@ -69,5 +71,9 @@ Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOpt
                 const std::vector<WhiskerMount>& mounts, const ModelParams& model,
                 std::span<const Pose2> grid_poses, int whisks, double travel_m, bool teleport,
                 Rng& rng, double* decision_ms);
+
+// report.json `exploration`: every field above but the path, whisk poses and bump points
+// (map.png draws those); the curve as [{travel_m, whisks, recall, precision, f1}].
+nlohmann::ordered_json explorationJson(const ExplorationReport& report);
 
 }  // namespace crunch::exploration

@@ -50,6 +50,9 @@
 #include "crunch/io/recording.h"
 #include "crunch/robot/mobile_base.h"
 #include "crunch/robot/whiskers.h"
+#include "crunch/exploration/known_space.h"
+#include "crunch/exploration/policy.h"
+#include "crunch/session/explore_loop.h"
 #include "crunch/session/robot_session.h"
 
 namespace crunch::session {
@@ -92,6 +95,13 @@ struct ControllerOptions {
   // Names the bridge in the calibration error ("the whisker bridge 1209:0001 sent no ...").
   std::string bridge = "the whisker bridge";
   BodyWhisk::Options whisk = roamingWhiskOptions(1, defaultWhiskerArray());
+  // --explore (issue 14, docs/EXPLORATION.md): after calibrating, the robot explores the
+  // session's area (RobotSessionOptions::area_lo/hi, the map frame) with the ExploreLoop — the
+  // behaviour `--sim --explore` drives the simulator's base with — instead of roaming: each
+  // whisk the loop makes is bracketed by whisk marks, so the session maps it as a roaming
+  // whisk (and a recording replays to the same map); its free rays, contacts and the map's
+  // legs and walls update the loop's KnownSpace. nullopt: roaming (kRoaming).
+  std::optional<ExploreLoop::Options> explore;
 
   // okStatus(), or an Error naming the first bad field: duration_s 0..1e7, map_every_s and
   // calibrate_timeout_s above 0 and at most 1e7, poll_timeout_s 0..1, whisk.validate() (prefixed
@@ -118,18 +128,21 @@ struct ControllerSources {
   std::function<std::uint64_t()> clock_ns;
 };
 
-// What the controller says as it goes. name: "start", "roaming", "bridge_lost", "bridge_back",
-// "contact", "bump", "whisk", "watchdog"; t: the base's now(); message: for a person.
+// What the controller says as it goes. name: "start", "roaming", "exploring", "goal", "bridge_lost",
+// "bridge_back", "contact", "bump", "whisk", "watchdog"; t: the base's now(); message: for a
+// person. An exploring robot's "goal" (the policy chose a whisk pose) has `pose` set to it, and
+// its "whisk" has `pose` set to where the whisk began (map frame).
 struct ControllerEvent {
   const char* name;
   double t;
   std::string message;
+  std::optional<Pose2> pose = std::nullopt;
 };
 using EventSink = std::function<void(const ControllerEvent&)>;
 
 class RobotController {
  public:
-  enum class Stage { kIdle, kCalibrating, kRoaming, kPaused, kStopped };
+  enum class Stage { kIdle, kCalibrating, kRoaming, kExploring, kPaused, kStopped };
 
   // Errors: options.validate(). Sends nothing to the base until start() and step().
   static Result<std::unique_ptr<RobotController>> create(MobileBase& base, RobotSession& session,
@@ -161,6 +174,9 @@ class RobotController {
   // okStatus(), or the first failure.
   const Status& failure() const { return failure_; }
   const BodyWhisk& whisk() const { return whisk_; }
+  // The exploring robot's loop (its report: path, whisk poses, bumps, travel, decisions); null
+  // when roaming.
+  const ExploreLoop* explore() const { return explore_.get(); }
 
  private:
   RobotController(MobileBase& base, RobotSession& session, const ControllerOptions& options,
@@ -172,6 +188,24 @@ class RobotController {
   void onLinkEvent(const LinkMonitor::Event& event);
   bool calibrating();
   bool roaming();
+  void startExploring();
+  bool exploring();
+  void onWhisked(const Pose2& pose);
+
+  // The base as the exploring loop sees it: the session's map-frame pose (start + odometry,
+  // the frame the map and the KnownSpace are in), the base's commands, bumper and clock.
+  class MapFrameBase final : public MobileBase {
+   public:
+    MapFrameBase(MobileBase& base, const RobotSession& session) : base_(base), session_(session) {}
+    Status drive(double v, double omega) override { return base_.drive(v, omega); }
+    Pose2 odometry() const override { return session_.pose(); }
+    bool bumped() const override { return base_.bumped(); }
+    double now() const override { return base_.now(); }
+
+   private:
+    MobileBase& base_;
+    const RobotSession& session_;
+  };
 
   MobileBase& base_;
   RobotSession& session_;
@@ -179,6 +213,14 @@ class RobotController {
   ControllerSources sources_;
   EventSink events_;
   BodyWhisk whisk_;
+  // Exploring (options.explore set): the loop over the map-frame base, what it knows, its policy.
+  MapFrameBase frame_base_;
+  std::unique_ptr<exploration::KnownSpace> known_;
+  std::unique_ptr<exploration::ExplorePolicy> policy_;
+  std::unique_ptr<ExploreLoop> explore_;
+  std::optional<Pose2> announced_goal_;
+  bool whisk_open_ = false;         // a kWhiskStart mark awaits its kWhiskEnd
+  std::size_t contacts_known_ = 0;  // the session's shapelets already marked in known_
   std::function<void(const io::Chunk&)> sink_;  // into the session, failures kept
   io::Chunk base_chunk_;                        // handleBaseBytes' staging slot
   Stage stage_ = Stage::kIdle;

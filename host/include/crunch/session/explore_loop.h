@@ -96,6 +96,12 @@ class ExploreLoop {
   const exploration::ExplorationReport& report() const { return report_; }
   // Ends the run now (e.g. the caller's time limit), with `why`.
   void finish(const std::string& why);
+  // The base dropped or was told to drop the last command (a paused robot, a watchdog stop):
+  // the next update() sends the current command again.
+  void commandLost() {
+    sent_ = false;
+    whisk_.commandLost();
+  }
 
  private:
   Status decideAndPlan();

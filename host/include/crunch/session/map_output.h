@@ -23,6 +23,7 @@
 #include <thread>
 
 #include "crunch/core/result.h"
+#include "crunch/exploration/exploration.h"
 #include "crunch/mapping/fused_map.h"
 #include "crunch/session/robot_session.h"
 
@@ -32,7 +33,8 @@ namespace crunch::session {
 // — drawn as the "truth", titled `title`), each complete or not at all; creates `out_dir` if
 // needed. The first Error.
 Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out_dir,
-                     const std::string& title);
+                     const std::string& title,
+                     const exploration::ExplorationReport* exploration = nullptr);
 
 // The report's session part as JSON text (an object): every counter of the data path ("bridge",
 // "samples", "create", "contacts"), "final_pose", "map" (tables, shapelets) and "shapelets"

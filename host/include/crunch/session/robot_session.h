@@ -116,6 +116,14 @@ class RobotSession {
   // an open whisk first).
   Map snapshot() const { return mapper_.snapshot(); }
   Map finish();
+  // Posterior draws of the map so far, for the exploring robot (Mapper::drawSamples: its own
+  // random stream, so the map does not depend on them).
+  void drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out) {
+    mapper_.drawSamples(n, beta, sweeps_between, out);
+  }
+  // The rays the whiskers swept free during the last whisk handed to the mapper.
+  const std::vector<FreeRay>& lastFreeRays() const { return free_rays_; }
+  const RobotSessionOptions& options() const { return options_; }
 
   const RobotSessionCounts& counts() const { return counts_; }
   const io::BridgeStreamCounters& decoderCounters() const { return chain_->decoderCounters(); }
