@@ -211,6 +211,14 @@ CLI::App* addSweep(CLI::App& app, SweepOptions& o) {
                     "vote | pool | marginal, for every point (default vote)");
   sweep->add_option("--acceptance", o.grid.acceptance,
                     "paper | literal | rj, for every point (default paper)");
+  sweep->add_option("--explore", o.grid.explore,
+                    "exploration policies, e.g. grid,random,frontier,entropy,infogain: each "
+                    "point is the driven run of --sim --explore NAME; 'none' is the pose list "
+                    "teleported (default: none); curves in OUT/curves.csv");
+  sweep->add_option("--travel-budget", o.grid.travel_budget,
+                    "metres each explore run may drive (default: no limit)");
+  sweep->add_option("--whisk-budget", o.grid.whisk_budget,
+                    "whisks each explore run may make (default: no limit)");
   sweep->add_option("--jobs", o.jobs, "worker threads (default: one per core)");
   sweep->add_option("--shard", o.shard,
                     "i/n: run only grid points with index % n == i (e.g. a Slurm array task)");

@@ -6,8 +6,13 @@
 //   at least two sampler settings), OUT/noise.{png,svg} (with two noise levels or more) and
 //   OUT/summary.csv (one row per noise and setting: means, spreads, whether on a front);
 // then prints the fronts and the recall at each noise level.
+// An explore sweep (DIR/curves.csv present, `sweep --explore`): instead, the curves
+// (loadExploreCurves, exploreSummaries) drawn as OUT/explore_<scene>_{recall,f1}.{png,svg}
+// (recall and F1 against metres driven, one line per policy, mean +-1 sd over seeds) and
+// OUT/explore_summary.csv; the Pareto and noise charts, which average over the policies, are
+// not drawn then.
 //
-// Input checks, all before anything is written: those of loadSweepSummary. Otherwise: a message
+// Input checks, all before anything is written: those of loadSweepSummary (loadExploreCurves). Otherwise: a message
 // naming the file (and the row and column), exit 2, nothing written.
 // Exit codes: 0 success; 2 bad input; 1 a file could not be written.
 #pragma once

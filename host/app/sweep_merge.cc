@@ -1,5 +1,6 @@
 #include "sweep_merge.h"
 
+#include <algorithm>
 #include <ostream>
 
 #include "crunch/mapping/sweep.h"
@@ -18,7 +19,12 @@ int runSweepMerge(const std::vector<std::string>& dirs, const std::string& out_d
     return 1;
   }
   out << "merged " << dirs.size() << " shards of grid " << rows.value().front().grid << ": "
-      << rows.value().size() << " rows; wrote " << out_dir << "/{sweep.csv,sweep.json}\n";
+      << rows.value().size() << " rows; wrote " << out_dir << "/{sweep.csv,sweep.json"
+      << (std::any_of(rows.value().begin(), rows.value().end(),
+                      [](const SweepRow& r) { return r.explore != "none"; })
+              ? ",curves.csv"
+              : "")
+      << "}\n";
   return 0;
 }
 

@@ -28,7 +28,8 @@ void printDone(const SweepOptions& opt, const SweepGrid& g, const SweepShard& sh
   }
   out << "sweep " << g.fingerprint << ": " << r.rows.size() << " of " << g.size()
       << " grid points (shard " << shard.name() << ") on " << r.jobs << " threads in "
-      << formatDuration(total_s) << "; wrote " << opt.out_dir << "/{sweep.csv,sweep.json}\n";
+      << formatDuration(total_s) << "; wrote " << opt.out_dir << "/{sweep.csv,sweep.json"
+      << (g.explores == std::vector<std::string>{"none"} ? "" : ",curves.csv") << "}\n";
 }
 
 }  // namespace
@@ -38,6 +39,10 @@ int runSweep(const SweepOptions& opt, std::ostream& out, std::ostream& err) {
   auto grid = buildSweepGrid(opt.grid);
   if (!grid) {
     err << "crunchhost sweep: " << grid.error().message << "\n";
+    return 2;
+  }
+  if (Status s = sim::validateSweepExplore(grid.value()); !s) {
+    err << "crunchhost sweep: " << s.error().message << "\n";
     return 2;
   }
   auto shard = parseSweepShard(opt.shard);

@@ -4,11 +4,13 @@
 // simulated run, crunch_sim/sim_run.h, as `--sim` runs it). `crunchhost sweep-merge` needs no
 // simulator: host/app/sweep_merge.h.
 //
-// Output: OUT/sweep.csv and OUT/sweep.json, each written atomically after every run has
+// Output: OUT/sweep.csv and OUT/sweep.json (and OUT/curves.csv with --explore: every explore
+// run's recall-against-travel curve, mapping/sweep.h), each written atomically after every run has
 // finished, so an interrupted sweep leaves no partial file. Progress: a bar with the time left
 // on `err`, or JSON lines on `out` with json_progress.
 //
-// Exit codes: 0 success; 2 bad input (an unknown scene file, a malformed list, a bad shard), with
+// Exit codes: 0 success; 2 bad input (an unknown scene file, a malformed list, a bad shard, an
+// unknown --explore policy or a bad --travel-budget / --whisk-budget), with
 // a message naming the option and nothing written; 1 a run or a write that failed.
 #pragma once
 

@@ -26,6 +26,15 @@ long peakRssKib() {
 // (world.h), and each World reuses its own scratch geoms.
 std::mutex g_world_mutex;
 
+// The run's curve in the sweep's own type (mapping cannot include exploration.h).
+std::vector<SweepCurvePoint> sweepCurve(const exploration::ExplorationReport& report) {
+  std::vector<SweepCurvePoint> curve;
+  curve.reserve(report.curve.size());
+  for (const exploration::CurvePoint& c : report.curve)
+    curve.push_back({c.travel_m, c.whisks, c.recall, c.precision, c.f1});
+  return curve;
+}
+
 SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_t index,
                   const SweepShard& shard) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -38,17 +47,49 @@ SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_
   // The grid's fusion as given (vote unless --chain-fusion): the gaussian sensor's default.
   o.chain_fusion_given = true;
   o.world_mutex = &g_world_mutex;
+  auto explore = sweepExploreOptions(g, p.explore);
+  if (!explore) throw std::runtime_error(explore.error().message);  // validated before
+  o.explore = explore.value();
   auto run = runSimulation(scenes[p.scene], o);
   if (!run) throw std::runtime_error(run.error().message);  // the grid validated every point
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return sweepRow(g, index, shard, run.value().map.stats, run.value().evaluation, wall,
-                  peakRssKib());
+  SweepRow row = sweepRow(g, index, shard, run.value().map.stats, run.value().evaluation, wall,
+                          peakRssKib());
+  if (o.explore) {
+    if (!run.value().exploration)
+      throw std::runtime_error("--explore " + p.explore + ": the run reported no exploration");
+    const exploration::ExplorationReport& ex = *run.value().exploration;
+    row.travel_m = ex.travel_m;
+    row.whisks = ex.whisks;
+    row.curve = sweepCurve(ex);
+  }
+  return row;
 }
 
 }  // namespace
 
+Result<std::optional<exploration::ExploreOptions>> sweepExploreOptions(const SweepGrid& g,
+                                                                       const std::string& explore) {
+  if (explore == "none") return std::optional<exploration::ExploreOptions>{};
+  auto kind = exploration::explorePolicyByName(explore);
+  if (!kind) return kind.error();
+  exploration::ExploreOptions e;
+  e.policy = kind.value();
+  e.travel_budget_m = g.travel_budget_m;
+  e.whisk_budget = g.whisk_budget;
+  if (Status s = e.validate(); !s) return s.error();
+  return std::optional<exploration::ExploreOptions>{e};
+}
+
+Status validateSweepExplore(const SweepGrid& g) {
+  for (const std::string& e : g.explores)
+    if (auto o = sweepExploreOptions(g, e); !o) return o.error();
+  return okStatus();
+}
+
 Result<SweepRunResult> runSweepPoints(const SweepGrid& g, const SweepShard& shard, int jobs,
                                       const std::function<void(size_t, size_t)>& progress) {
+  if (Status s = validateSweepExplore(g); !s) return s.error();
   std::vector<SimScene> scenes;
   for (const SweepScene& s : g.scenes) scenes.push_back(SimScene::build(s.scene));
   std::vector<size_t> indices;

@@ -134,3 +134,159 @@ TEST_CASE("loadSweepSummary: rows of two object models average apart; no model c
   // Rows without the column (sweeps from before the axis) are the paper's.
   CHECK(load(synthetic()).front().model == "paper");
 }
+
+// ---- Exploration curves (issue 14): hand-made curves.csv, two policies x two seeds.
+namespace {
+// grid:   seed 1 whisks at 1 m (recall .2, F1 .3) and 3 m (.6, .7);
+//         seed 2 at 2 m (.4, .5) and 4 m (1.0, .9).
+// random: seed 1 at 1 m (0, 0) and 6 m (.5, .6); seed 2 at 2 m (.25, .3).
+const char* kCurves =
+    "grid_index,scene,model,explore,noise,seed,whisk,travel_m,whisks,recall,precision,f1\n"
+    "0,s.json,paper,grid,realistic,1,0,1,1,0.2,1.0,0.3\n"
+    "0,s.json,paper,grid,realistic,1,1,3,2,0.6,0.8,0.7\n"
+    "1,s.json,paper,grid,realistic,2,0,2,1,0.4,null,0.5\n"
+    "1,s.json,paper,grid,realistic,2,1,4,2,1.0,0.8,0.9\n"
+    "2,s.json,paper,random,realistic,1,0,1,1,0.0,,0.0\n"
+    "2,s.json,paper,random,realistic,1,1,6,5,0.5,0.7,0.6\n"
+    "3,s.json,paper,random,realistic,2,0,2,1,0.25,0.35,0.3\n";
+}  // namespace
+
+TEST_CASE("Explore curves: a step function of travel, 0 before the first whisk, held after the "
+          "last", "[sweep][explore]") {
+  const std::vector<double> travel = {1.0, 3.0, 3.0, 5.0}, value = {0.2, 0.4, 0.5, 0.9};
+  CHECK(curveValueAt(travel, value, 0.0) == 0.0);
+  CHECK(curveValueAt(travel, value, 0.999) == 0.0);
+  CHECK(curveValueAt(travel, value, 1.0) == 0.2);
+  CHECK(curveValueAt(travel, value, 2.9) == 0.2);
+  CHECK(curveValueAt(travel, value, 3.0) == 0.5);  // two whisks at 3 m: the later one counts
+  CHECK(curveValueAt(travel, value, 100.0) == 0.9);
+}
+
+TEST_CASE("Explore summaries: mean and sd over seeds on a common travel axis per scene",
+          "[sweep][explore]") {
+  const auto curves = parseExploreCurves(kCurves, "curves.csv");
+  REQUIRE(curves);
+  REQUIRE(curves.value().size() == 4);
+  CHECK(std::isnan(curves.value()[1].precision[0]));  // null precision (nothing mapped) read
+  CHECK(std::isnan(curves.value()[0].run_recall));     // no run_recall column: not known
+  const auto all = exploreSummaries(curves.value(), 7, 0.9);  // axis 0, 1, ..., 6 m
+  REQUIRE(all.size() == 2);
+  const ExploreSummary& grid = all[0];
+  const ExploreSummary& random = all[1];
+  CHECK(grid.explore == "grid");
+  CHECK(random.explore == "random");
+  CHECK(grid.runs == 2);
+  CHECK(grid.travel == std::vector<double>{0, 1, 2, 3, 4, 5, 6});
+  CHECK(random.travel == grid.travel);  // one axis for the scene: to the longest run (6 m)
+  const double s2 = std::sqrt(2.0);  // sd of two values d apart: d / sqrt(2)
+  const std::vector<std::tuple<int, double, double>> grid_recall = {
+      {0, 0.0, 0.0}, {1, 0.1, 0.2 / s2}, {2, 0.3, 0.2 / s2}, {3, 0.5, 0.2 / s2},
+      {4, 0.8, 0.4 / s2}, {6, 0.8, 0.4 / s2}};
+  for (const auto& [i, m, d] : grid_recall) {
+    INFO("grid at " << i << " m");
+    CHECK(grid.recall_mean[i] == Approx(m));
+    CHECK(grid.recall_sd[i] == Approx(d));
+  }
+  CHECK(grid.f1_mean[4] == Approx(0.8));
+  CHECK(grid.f1_sd[4] == Approx(0.2 / s2));
+  CHECK(random.recall_mean[1] == Approx(0.0));
+  CHECK(random.recall_mean[2] == Approx(0.125));
+  CHECK(random.recall_sd[2] == Approx(0.25 / s2));
+  CHECK(random.recall_mean[5] == Approx(0.125));  // seed 2 ended at 2 m: its 0.25 held
+  CHECK(random.recall_mean[6] == Approx(0.375));
+  CHECK(random.f1_mean[6] == Approx(0.45));
+  CHECK(grid.final_travel_mean == Approx(3.5));
+  CHECK(grid.final_whisks_mean == Approx(2.0));
+  CHECK(grid.final_recall_mean == Approx(0.8));
+  CHECK(grid.final_f1_mean == Approx(0.8));
+  CHECK(random.final_travel_mean == Approx(4.0));
+  CHECK(random.final_whisks_mean == Approx(3.0));
+  // Target 0.9: only grid's seed 2 reaches it (at 4 m); neither mean curve does.
+  CHECK(grid.reached == 1);
+  CHECK(grid.travel_to_target_mean == Approx(4.0));
+  CHECK(std::isnan(grid.mean_curve_travel_to_target));
+  CHECK(random.reached == 0);
+  CHECK(std::isnan(random.travel_to_target_mean));
+  // Target 0.5: grid's seeds at 3 and 4 m, its mean curve at 3 m; random's seed 1 at 6 m.
+  const auto half = exploreSummaries(curves.value(), 7, 0.5);
+  CHECK(half[0].reached == 2);
+  CHECK(half[0].travel_to_target_mean == Approx(3.5));
+  CHECK(half[0].mean_curve_travel_to_target == Approx(3.0));
+  CHECK(half[1].reached == 1);
+  CHECK(std::isnan(half[1].mean_curve_travel_to_target));
+  const std::string csv = exploreSummaryCsv(half);
+  CHECK(csv.find("s.json,paper,realistic,grid,2,3.50,2.0,0.8000,") != std::string::npos);
+  CHECK(csv.find(",0.5,2,3.50,3.00,,,,\n") != std::string::npos);  // final maps not given
+  CHECK(csv.find("s.json,paper,realistic,random,2,4.00,3.0,0.3750,") != std::string::npos);
+  CHECK(csv.find(",0.5,1,6.00,,,,,\n") != std::string::npos);  // mean curve never reached 0.5
+}
+
+TEST_CASE("Explore curves: bad lines are errors naming the file, line and column",
+          "[sweep][explore]") {
+  const std::string header =
+      "grid_index,scene,model,explore,noise,seed,whisk,travel_m,whisks,recall,precision,f1\n";
+  CHECK_THAT(parseExploreCurves("scene,seed\n", "c.csv").error().message,
+             Catch::Contains("c.csv") && Catch::Contains("header") && Catch::Contains("model"));
+  CHECK_THAT(parseExploreCurves(header + "0,s,paper,grid,realistic,1,0,1,1,1.5,1,0.5\n", "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("line 2") && Catch::Contains("recall"));
+  CHECK_THAT(parseExploreCurves(header + "0,s,paper,grid,realistic,1,0,1,1,0.5\n", "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("line 2") && Catch::Contains("fields"));
+  CHECK_THAT(parseExploreCurves(header + "0,s,paper,grid,realistic,1,0,2,1,0.5,1,0.5\n"
+                                         "0,s,paper,grid,realistic,1,1,1,2,0.5,1,0.5\n",
+                                "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("line 3") && Catch::Contains("travel_m"));
+  CHECK_THAT(parseExploreCurves(header + "0,s,paper,grid,realistic,1,0,x,1,0.5,1,0.5\n", "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("travel_m") && Catch::Contains("'x'"));
+  // A scene path with a comma is quoted by the writer and read back whole.
+  const auto quoted =
+      parseExploreCurves(header + "0,\"a,b.json\",paper,grid,realistic,1,0,1,1,0.5,1,0.5\n", "c");
+  REQUIRE(quoted);
+  CHECK(quoted.value()[0].scene == "a,b.json");
+  TempDir dir;
+  CHECK_THAT(loadExploreCurves(dir.file("curves.csv")).error().message,
+             Catch::Contains("curves.csv") && Catch::Contains("cannot read"));
+  std::ofstream(dir.file("empty.csv")) << header;
+  CHECK_THAT(loadExploreCurves(dir.file("empty.csv")).error().message,
+             Catch::Contains("no curve point"));
+}
+
+TEST_CASE("Explore curves: a run's travel after its last whisk extends the axis and its figures",
+          "[sweep][explore]") {
+  const std::string header = "scene,model,explore,noise,seed,travel_m,whisks,recall,precision,f1,"
+                             "run_travel_m,run_recall,run_f1\n";
+  // grid whisks at 1 m and stops at 2 m; random whisks at 1 m, then drives on to 8 m. Their
+  // final maps (global inference) find more than the curves' snapshots.
+  const auto curves = parseExploreCurves(header +
+                                             "s,paper,grid,realistic,1,1,1,0.5,1,0.6,2,0.75,0.8\n"
+                                             "s,paper,random,realistic,1,1,1,0.25,1,0.4,8,0.5,0.6\n",
+                                         "c.csv");
+  REQUIRE(curves);
+  CHECK(curves.value()[1].run_travel_m == 8.0);
+  const auto all = exploreSummaries(curves.value(), 9);
+  REQUIRE(all.size() == 2);
+  CHECK(all[0].travel.back() == 8.0);  // to the longest run, not its last whisk
+  CHECK(all[0].recall_mean.back() == Approx(0.5));
+  CHECK(all[0].final_travel_mean == Approx(2.0));
+  CHECK(all[1].final_travel_mean == Approx(8.0));
+  CHECK(all[0].map_recall_mean == Approx(0.75));
+  CHECK(all[0].final_recall_mean == Approx(0.5));  // the curve's last, not the final map's
+  CHECK(all[1].map_f1_mean == Approx(0.6));
+  CHECK(all[1].map_recall_sd == 0.0);  // one seed
+  CHECK_THAT(parseExploreCurves(header + "s,paper,grid,realistic,1,1,1,0.5,1,0.6,2,1.5,0.8\n",
+                                "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("run_recall"));
+  CHECK_THAT(parseExploreCurves(header + "s,paper,grid,realistic,1,3,1,0.5,1,0.6,2,0.5,0.5\n", "c.csv")
+                 .error()
+                 .message,
+             Catch::Contains("run_travel_m") && Catch::Contains("below"));
+}

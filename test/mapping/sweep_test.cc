@@ -3,6 +3,8 @@
 #include "crunch/mapping/sweep.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -14,11 +16,12 @@ using namespace crunch;
 
 namespace {
 
+// (std::string(...): GCC 12 warns -Wrestrict falsely on `s.seeds = "3"` here once inlined.)
 SweepGridSpec smallSpec() {
   SweepGridSpec s;
-  s.noise = "ideal,noisy";
-  s.schedule_steps = "4,8";
-  s.seeds = "3";
+  s.noise = std::string("ideal,noisy");
+  s.schedule_steps = std::string("4,8");
+  s.seeds = std::string(1, '3');
   return s;
 }
 
@@ -169,13 +172,18 @@ TEST_CASE("Sweep rows: CSV has the JSON's values, and JSON reads back exactly", 
   CHECK(sweepRowsCsv(back.value()) == sweepRowsCsv(rows));
   const std::string csv = sweepRowsCsv(rows);
   CHECK(csv.substr(0, csv.find('\n')) ==
-        "grid,grid_index,grid_size,shard,scene,model,noise,sigma_r,sigma_phi,schedule_steps,sweeps,"
-        "working_memory,seed,poses,shapelets,fused_tables,true_tables,matched,precision,recall,"
+        "grid,grid_index,grid_size,shard,scene,model,explore,noise,sigma_r,sigma_phi,"
+        "schedule_steps,sweeps,working_memory,seed,poses,shapelets,travel_m,whisks,"
+        "fused_tables,true_tables,matched,precision,recall,"
         "f1,mean_position_error_m,mean_angle_error_rad,per_pose_match_fraction,"
         "phantoms_near_walls,phantoms_elsewhere,proposals,peak_live_tables,peak_live_legs,"
         "wall_s,process_peak_rss_kib");
   CHECK(back.value()[1].proposals == 123456789012LL);
   CHECK(back.value()[1].noise == "noisy");  // 7 = (noisy, 4 temperatures, seed 2)
+  // Without --explore: the pose list teleported, no travel measured, one whisk per pose.
+  CHECK(back.value()[1].explore == "none");
+  CHECK(std::isnan(back.value()[1].travel_m));
+  CHECK(back.value()[1].whisks == 10);
   CHECK_FALSE(parseSweepRows("{}", "x.json"));
   CHECK_THAT(parseSweepRows("[{\"grid\": 1}]", "x.json").error().message,
              Catch::Contains("x.json") && Catch::Contains("not a sweep row"));
@@ -206,4 +214,121 @@ TEST_CASE("Sweep merge: shards join in grid order, other grids, twins and gaps r
   CHECK_THAT(mergeSweepShards({c.file("nothing")}).error().message,
              Catch::Contains("not a sweep output directory"));
   CHECK_FALSE(mergeSweepShards({}));
+}
+
+TEST_CASE("Sweep explore axis: grid order after the model, budgets checked, fingerprint kept "
+          "without it", "[sweep]") {
+  SweepGridSpec spec = smallSpec();
+  const std::string plain = buildSweepGrid(spec).value().fingerprint;
+  spec.explore = "random,infogain";
+  spec.travel_budget = "30";
+  spec.whisk_budget = "200";
+  const auto g = buildSweepGrid(spec);
+  REQUIRE(g);
+  CHECK(g.value().size() == 2 * 2 * 2 * 3);
+  CHECK(g.value().travel_budget_m == 30.0);
+  CHECK(g.value().whisk_budget == 200);
+  // explore is slower than noise: the first 12 points are random's, the next 12 infogain's.
+  CHECK(g.value().pointAt(0).explore == "random");
+  CHECK(g.value().pointAt(11).explore == "random");
+  CHECK(g.value().pointAt(11).noise == 1);
+  CHECK(g.value().pointAt(12).explore == "infogain");
+  CHECK(g.value().pointAt(12).noise == 0);
+  CHECK(g.value().fingerprint != plain);
+  SweepGridSpec budget = spec;
+  budget.travel_budget = "40";
+  CHECK(buildSweepGrid(budget).value().fingerprint != g.value().fingerprint);
+  SweepGridSpec none = smallSpec();
+  none.explore = "none";  // the default said out loud: the same grid
+  CHECK(buildSweepGrid(none).value().fingerprint == plain);
+  CHECK(buildSweepGrid(smallSpec()).value().pointAt(0).explore == "none");
+
+  SweepGridSpec twice = smallSpec();
+  twice.explore = "random,random";
+  CHECK_THAT(buildSweepGrid(twice).error().message,
+             Catch::Contains("--explore") && Catch::Contains("twice"));
+  SweepGridSpec lonely = smallSpec();
+  lonely.travel_budget = "10";  // a budget without a policy to spend it
+  CHECK_THAT(buildSweepGrid(lonely).error().message, Catch::Contains("--travel-budget"));
+  lonely.travel_budget.clear();
+  lonely.whisk_budget = "5";
+  CHECK_THAT(buildSweepGrid(lonely).error().message, Catch::Contains("--whisk-budget"));
+  SweepGridSpec bad = spec;
+  bad.travel_budget = "ten";
+  CHECK_THAT(buildSweepGrid(bad).error().message, Catch::Contains("--travel-budget"));
+  bad = spec;
+  bad.whisk_budget = "1,2";
+  CHECK_THAT(buildSweepGrid(bad).error().message, Catch::Contains("--whisk-budget"));
+}
+
+TEST_CASE("Sweep curves.csv: one line per whisk of every explore row, written beside the sweep",
+          "[sweep]") {
+  SweepGridSpec spec = smallSpec();
+  spec.explore = "grid,random";
+  const SweepGrid g = buildSweepGrid(spec).value();
+  std::vector<SweepRow> rows = {rowAt(g, 0, {}), rowAt(g, 13, {})};
+  rows[0].travel_m = 1.5;
+  rows[0].whisks = 2;
+  rows[0].curve = {{0.5, 1, 0.0, std::numeric_limits<double>::quiet_NaN(), 0.0},
+                   {1.5, 2, 0.5, 1.0, 2.0 / 3.0}};
+  rows[1].travel_m = 0.75;
+  rows[1].whisks = 1;
+  rows[1].curve = {{0.75, 1, 0.25, 0.5, 1.0 / 3.0}};
+  const std::string csv = sweepCurvesCsv(rows);
+  std::vector<std::string> lines;
+  for (size_t b = 0, e; (e = csv.find('\n', b)) != std::string::npos; b = e + 1)
+    lines.push_back(csv.substr(b, e - b));
+  REQUIRE(lines.size() == 4);
+  CHECK(lines[0] == "grid_index,scene,model,explore,noise,seed,whisk,travel_m,whisks,recall,"
+                    "precision,f1,run_travel_m,run_recall,run_f1");
+  // Each line carries its run's travel and final map (rowAt: recall 1, F1 0.8).
+  CHECK(lines[1] == "0,default,paper,grid,ideal,1,0,0.5,1,0.0,null,0.0,1.5,1.0,0.8");
+  CHECK(lines[3].find(",0.75,1.0,0.8") != std::string::npos);
+  CHECK(lines[2].rfind("0,default,paper,grid,ideal,1,1,1.5,2,0.5,1.0,0.6666", 0) == 0);
+  // 13 = (random, ideal, 4 temperatures, seed 2)
+  CHECK(lines[3].rfind("13,default,paper,random,ideal,2,0,0.75,1,0.25,0.5,0.333", 0) == 0);
+  const std::string json = sweepRowsJson(rows);
+  const auto back = parseSweepRows(json, "sweep.json");
+  REQUIRE(back);
+  CHECK(back.value()[0].explore == "grid");
+  CHECK(back.value()[0].travel_m == 1.5);
+  CHECK(back.value()[1].whisks == 1);
+
+  TempDir dir;
+  REQUIRE(writeSweepFiles(rows, dir.path().string()));
+  std::ifstream in(dir.file("curves.csv"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK(text == csv);
+  // Without explore rows no curves.csv is written.
+  TempDir plain;
+  const SweepGrid pg = buildSweepGrid(smallSpec()).value();
+  REQUIRE(writeSweepFiles({rowAt(pg, 0, {})}, plain.path().string()));
+  CHECK_FALSE(std::ifstream(plain.file("curves.csv")).good());
+}
+
+TEST_CASE("Sweep merge: explore shards' curves come back from their curves.csv", "[sweep]") {
+  SweepGridSpec spec = smallSpec();
+  spec.explore = "grid";
+  const SweepGrid g = buildSweepGrid(spec).value();
+  const SweepShard s0 = parseSweepShard("0/2").value(), s1 = parseSweepShard("1/2").value();
+  std::vector<SweepRow> even, odd;
+  for (size_t i = 0; i < g.size(); ++i) {
+    SweepRow r = rowAt(g, i, i % 2 ? s1 : s0);
+    r.travel_m = static_cast<double>(i);
+    for (int k = 0; k <= static_cast<int>(i % 3); ++k)  // 1 to 3 points per run
+      r.curve.push_back({0.5 * k, k + 1, 0.1 * k, 1.0, 0.05 * k});
+    (i % 2 ? odd : even).push_back(r);
+  }
+  std::vector<SweepRow> all;
+  for (size_t i = 0; i < g.size(); ++i) all.push_back(i % 2 ? odd[i / 2] : even[i / 2]);
+  TempDir a, b;
+  REQUIRE(writeSweepFiles(odd, a.path().string()));
+  REQUIRE(writeSweepFiles(even, b.path().string()));
+  const auto merged = mergeSweepShards({a.path().string(), b.path().string()});
+  REQUIRE(merged);
+  CHECK(sweepCurvesCsv(merged.value()) == sweepCurvesCsv(all));
+  CHECK(merged.value()[4].curve.size() == 2);
+  std::filesystem::remove(a.file("curves.csv"));
+  CHECK_THAT(mergeSweepShards({a.path().string(), b.path().string()}).error().message,
+             Catch::Contains("curves.csv"));
 }

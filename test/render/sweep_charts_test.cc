@@ -2,6 +2,7 @@
 #include "crunch/render/sweep_charts.h"
 
 #include <catch2/catch.hpp>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -100,4 +101,65 @@ TEST_CASE("sweepCharts: two object models get their own fronts, a comparison and
   // isPaperSetting is the paper's model at the paper's budget only.
   CHECK(all[1].isPaperSetting());
   CHECK_FALSE(all[4].isPaperSetting());
+}
+
+TEST_CASE("exploreCharts: recall and F1 against travel per scene, one line per policy with its "
+          "sd band", "[sweep_charts][explore]") {
+  auto summary = [](const std::string& scene, const std::string& explore, int runs) {
+    ExploreSummary s;
+    s.scene = scene;
+    s.model = "paper";
+    s.noise = "realistic";
+    s.explore = explore;
+    s.runs = runs;
+    s.travel = {0.0, 1.0, 2.0};
+    s.recall_mean = {0.0, 0.5, 0.9};
+    s.recall_sd = {0.0, 0.2, 0.2};
+    s.f1_mean = {0.0, 0.4, 0.8};
+    s.f1_sd = {0.0, 0.1, 0.1};
+    s.final_travel_mean = 2.0;
+    s.final_recall_mean = 0.9;
+    s.final_f1_mean = 0.8;
+    s.mean_curve_travel_to_target = 2.0;
+    s.map_recall_mean = s.map_f1_mean = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  };
+  const std::vector<ExploreSummary> all = {summary("test/scenes/large_room.json", "grid", 2),
+                                           summary("test/scenes/large_room.json", "infogain", 1),
+                                           summary("default", "grid", 2)};
+  const SweepChartSet set = exploreCharts(all);
+  CHECK(names(set) == std::vector<std::string>{"explore_large_room_recall", "explore_large_room_f1",
+                                               "explore_default_recall", "explore_default_f1"});
+  const Chart& recall = set.charts[0].second;
+  REQUIRE(recall.validate());
+  // The 0.9 target line, grid's mean and its two sd lines, infogain's mean (one seed: no band).
+  REQUIRE(recall.series.size() == 5);
+  CHECK(recall.series[0].y == std::vector<double>{0.9, 0.9});
+  CHECK(recall.series[1].y == std::vector<double>{0.0, 0.5, 0.9});
+  CHECK(recall.series[2].y[1] == Approx(0.3));
+  CHECK(recall.series[3].y[2] == Approx(1.0));  // mean + sd clipped at 1
+  CHECK(recall.series[3].label.empty());        // the band stays out of the legend
+  CHECK(recall.series[1].label.rfind("grid", 0) == 0);
+  CHECK(recall.series[4].label.rfind("infogain", 0) == 0);
+  const Chart& f1 = set.charts[1].second;
+  REQUIRE(f1.series.size() == 4);  // no target line on the F1 chart
+  CHECK(f1.series[0].y == std::vector<double>{0.0, 0.4, 0.8});
+  CHECK(set.report.find("explore large_room:") != std::string::npos);
+  CHECK(set.summary_csv.find("test/scenes/large_room.json,paper,realistic,infogain,1,") !=
+        std::string::npos);
+  // With the final maps known: a square per policy at its mean travel, sd as its bar.
+  std::vector<ExploreSummary> mapped = {all[0]};
+  mapped[0].map_recall_mean = 0.95;
+  mapped[0].map_recall_sd = 0.05;
+  mapped[0].map_f1_mean = 0.9;
+  const Chart with_map = exploreCharts(mapped).charts[0].second;
+  REQUIRE(with_map.series.size() == 5);
+  CHECK(with_map.series[4].x == std::vector<double>{2.0});
+  CHECK(with_map.series[4].y == std::vector<double>{0.95});
+  CHECK(with_map.series[4].y_error == std::vector<double>{0.05});
+  CHECK(with_map.series[1].label.find("final map 0.95") != std::string::npos);
+  ExploreSummary rooms = all[0];
+  rooms.model = "rooms";
+  rooms.noise = "noisy";
+  CHECK(exploreChartStem(rooms) == "large_room_rooms_noisy");
 }

@@ -298,3 +298,76 @@ TEST_CASE("sweep: bad options exit 2 naming the option and write nothing", "[app
     CHECK_FALSE(std::filesystem::exists(out_dir));
   }
 }
+
+TEST_CASE("sweep --explore: an unknown policy or a bad budget exits 2 naming the option, writes "
+          "nothing", "[app][sweep][explore]") {
+  TempDir d;
+  const std::string out_dir = d.file("out");
+  struct Case {
+    std::string option, explore, travel, whisks;
+  };
+  // Unknown names and negative budgets are the exploration library's checks
+  // (explorePolicyByName, ExploreOptions::validate); a budget without a policy is the grid's.
+  const std::vector<Case> cases = {{"--explore", "grid,teleport", "", ""},
+                                   {"--travel-budget", "grid", "-1", ""},
+                                   {"--travel-budget", "grid", "0", ""},
+                                   {"--whisk-budget", "random", "", "-3"},
+                                   {"--travel-budget", "", "10", ""},
+                                   {"--travel-budget", "none", "10", ""}};
+  for (const Case& c : cases) {
+    app::SweepOptions o = tinyGrid(out_dir);
+    o.grid.explore = c.explore;
+    o.grid.travel_budget = c.travel;
+    o.grid.whisk_budget = c.whisks;
+    const Run r = sweep(o);
+    INFO(c.option << " (explore '" << c.explore << "'): " << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(c.option) != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(out_dir));
+  }
+}
+
+TEST_CASE("sweep --explore: a row carries the run's travel and whisks, its curve goes to "
+          "curves.csv, as --sim --explore reports them", "[app][sweep][explore]") {
+  // One driven run on two_tables.json, stopped after 6 whisks, against the same --sim run.
+  TempDir sw, sim;
+  app::SweepOptions o = tinyGrid(sw.path().string());
+  o.grid.schedule_steps = "4";
+  o.grid.seeds = "1";
+  o.grid.explore = "frontier";
+  o.grid.whisk_budget = "6";
+  const Run r = sweep(o);
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const Json row = rows(sw.path().string()).at(0);
+  CHECK(row["explore"] == "frontier");
+  const auto curves = csvCells(slurp(sw.file("curves.csv")));
+  REQUIRE(curves.size() >= 2);
+  CHECK(curves[0].back() == "run_f1");
+  CHECK(std::stod(curves.back()[13]) == Approx(row["recall"].get<double>()));  // run_recall
+  CHECK(std::stod(curves.back()[14]) == Approx(row["f1"].get<double>()));      // run_f1
+  const int whisks = row["whisks"].get<int>();
+  CHECK(whisks >= 1);
+  CHECK(whisks <= 6);
+  CHECK(static_cast<int>(curves.size()) - 1 == whisks);  // one line per whisk
+  CHECK(std::stod(curves.back()[12]) == Approx(row["travel_m"].get<double>()));  // run_travel_m
+
+  app::SimOptions so;
+  so.scene_path = kScene;
+  so.noise = "realistic";
+  so.seed = 1;
+  so.mapping.sampler.schedule_steps = 4;
+  so.explore = "frontier";
+  so.whisk_budget = 6;
+  so.out_dir = sim.path().string();
+  std::ostringstream out, err;
+  REQUIRE(app::runSim(so, out, err) == 0);
+  const Json ex = Json::parse(slurp(sim.file("report.json")))["exploration"];
+  CHECK(row["travel_m"] == ex["travel_m"]);
+  CHECK(row["whisks"] == ex["whisks"]);
+  REQUIRE(ex["curve"].size() == static_cast<size_t>(whisks));
+  const Json& last = ex["curve"].back();
+  CHECK(std::stod(curves.back()[7]) == Approx(last["travel_m"].get<double>()));
+  CHECK(std::stod(curves.back()[9]) == Approx(last["recall"].get<double>()));
+  CHECK(std::stod(curves.back()[11]) == Approx(last["f1"].get<double>()));
+}

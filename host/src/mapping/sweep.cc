@@ -20,12 +20,13 @@ const std::vector<std::string> kSweepColumns = {
     "grid",           "grid_index",
     "grid_size",      "shard",
     "scene",          "model",
-    "noise",          "sigma_r",
+    "explore",        "noise",          "sigma_r",
     "sigma_phi",
     "schedule_steps",
     "sweeps",         "working_memory",
     "seed",           "poses",
-    "shapelets",      "fused_tables",
+    "shapelets",      "travel_m",
+    "whisks",         "fused_tables",
     "true_tables",    "matched",
     "precision",      "recall",
     "f1",
@@ -37,6 +38,11 @@ const std::vector<std::string> kSweepColumns = {
     "proposals",      "peak_live_tables",
     "peak_live_legs", "wall_s",
     "process_peak_rss_kib"};
+
+const std::vector<std::string> kCurveColumns = {
+    "grid_index", "scene",    "model",  "explore", "noise",     "seed",
+    "whisk",      "travel_m", "whisks", "recall",  "precision", "f1",
+    "run_travel_m", "run_recall", "run_f1"};
 
 namespace {
 
@@ -183,6 +189,41 @@ Status parseModels(const SweepGridSpec& spec, SweepGrid& g) {
   return okStatus();
 }
 
+// The names only: whether each is a policy is the exploration library's check
+// (crunch_sim/sweep_run.h validateSweepExplore), which this layer cannot link.
+Status parseExplore(const SweepGridSpec& spec, SweepGrid& g) {
+  if (spec.explore.empty()) {
+    g.explores = {"none"};
+  } else {
+    auto names = splitList(spec.explore, "--explore");
+    if (!names) return names.error();
+    for (const std::string& n : names.value()) {
+      if (std::find(g.explores.begin(), g.explores.end(), n) != g.explores.end())
+        return Error{"--explore: '" + n + "' appears twice"};
+      g.explores.push_back(n);
+    }
+  }
+  const bool any_policy =
+      std::any_of(g.explores.begin(), g.explores.end(), [](const auto& n) { return n != "none"; });
+  if (!spec.travel_budget.empty()) {
+    if (!any_policy) return Error{"--travel-budget: needs --explore with a policy"};
+    char* end = nullptr;
+    const double v = std::strtod(spec.travel_budget.c_str(), &end);
+    if (end != spec.travel_budget.c_str() + spec.travel_budget.size() || std::isnan(v))
+      return Error{"--travel-budget: '" + spec.travel_budget + "' is not a number of metres"};
+    g.travel_budget_m = v;
+  }
+  if (!spec.whisk_budget.empty()) {
+    if (!any_policy) return Error{"--whisk-budget: needs --explore with a policy"};
+    auto v = parseIntegers<int>(spec.whisk_budget, "--whisk-budget",
+                                std::numeric_limits<int>::min());
+    if (!v) return v.error();
+    if (v.value().size() != 1) return Error{"--whisk-budget: one count, for every explore point"};
+    g.whisk_budget = v.value().front();
+  }
+  return okStatus();
+}
+
 Status parseNoises(const SweepGridSpec& spec, SweepGrid& g) {
   if (!spec.noise.empty()) {
     auto names = splitList(spec.noise, "--noise");
@@ -249,6 +290,12 @@ std::string fingerprint(const SweepGrid& g, const std::vector<std::string>& scen
     for (const ObjectModel m : g.models) d << " " << objectModelName(m);
     d << "\n";
   }
+  // The explore line only with the axis: a grid without it keeps the fingerprint it had.
+  if (g.explores != std::vector<std::string>{"none"}) {
+    d << "explore";
+    for (const std::string& e : g.explores) d << " " << e;
+    d << " travel_budget " << g.travel_budget_m << " whisk_budget " << g.whisk_budget << "\n";
+  }
   for (const NoiseRegime& n : g.noises)
     d << "noise " << n.name << " " << n.sigma_r << " " << n.sigma_phi << "\n";
   d << "schedule_steps";
@@ -281,6 +328,7 @@ Json rowJson(const SweepRow& r) {
   row["shard"] = r.shard;
   row["scene"] = r.scene;
   row["model"] = r.model;
+  row["explore"] = r.explore;
   row["noise"] = r.noise;
   row["sigma_r"] = r.sigma_r;
   row["sigma_phi"] = r.sigma_phi;
@@ -290,6 +338,8 @@ Json rowJson(const SweepRow& r) {
   row["seed"] = r.seed;
   row["poses"] = r.poses;
   row["shapelets"] = r.shapelets;
+  row["travel_m"] = r.travel_m;  // NaN ("none") is written as null
+  row["whisks"] = r.whisks;
   row["fused_tables"] = ev.fused_tables;
   row["true_tables"] = ev.true_tables;
   row["matched"] = ev.matched;
@@ -324,6 +374,7 @@ SweepRow rowFromJson(const Json& j) {
   r.shard = j.at("shard").get<std::string>();
   r.scene = j.at("scene").get<std::string>();
   r.model = j.at("model").get<std::string>();
+  r.explore = j.at("explore").get<std::string>();
   r.noise = j.at("noise").get<std::string>();
   r.sigma_r = number(j.at("sigma_r"));
   r.sigma_phi = number(j.at("sigma_phi"));
@@ -333,6 +384,8 @@ SweepRow rowFromJson(const Json& j) {
   r.seed = j.at("seed").get<std::uint64_t>();
   r.poses = j.at("poses").get<int>();
   r.shapelets = j.at("shapelets").get<int>();
+  r.travel_m = number(j.at("travel_m"));
+  r.whisks = j.at("whisks").get<int>();
   ev.fused_tables = j.at("fused_tables").get<int>();
   ev.true_tables = j.at("true_tables").get<int>();
   ev.matched = j.at("matched").get<int>();
@@ -367,7 +420,7 @@ std::string csvField(const Json& v) {
 }  // namespace
 
 std::size_t SweepGrid::size() const {
-  return scenes.size() * models.size() * noises.size() * schedule_steps.size() * sweeps.size() *
+  return scenes.size() * models.size() * explores.size() * noises.size() * schedule_steps.size() * sweeps.size() *
          working_memory.size() * seeds.size();
 }
 
@@ -384,6 +437,8 @@ SweepPoint SweepGrid::pointAt(std::size_t index) const {
   i /= schedule_steps.size();
   p.noise = i % noises.size();
   i /= noises.size();
+  p.explore = explores[i % explores.size()];
+  i /= explores.size();
   p.model = models[i % models.size()];
   i /= models.size();
   p.scene = i;
@@ -407,6 +462,7 @@ Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec) {
   std::vector<std::string> scene_texts;
   if (auto s = loadScenes(spec, g, scene_texts); !s) return s.error();
   if (auto s = parseModels(spec, g); !s) return s.error();
+  if (auto s = parseExplore(spec, g); !s) return s.error();
   if (auto s = parseNoises(spec, g); !s) return s.error();
   const SamplerOptions sampler_defaults;
   const MappingOptions mapping_defaults;
@@ -500,6 +556,7 @@ SweepRow sweepRow(const SweepGrid& g, std::size_t index, const SweepShard& shard
   r.shard = shard.name();
   r.scene = g.scenes[p.scene].arg;
   r.model = objectModelName(p.model);
+  r.explore = p.explore;
   r.noise = noise.name;
   r.sigma_r = noise.sigma_r;
   r.sigma_phi = noise.sigma_phi;
@@ -509,6 +566,7 @@ SweepRow sweepRow(const SweepGrid& g, std::size_t index, const SweepShard& shard
   r.seed = p.seed;
   r.poses = stats.poses;
   r.shapelets = stats.shapelets;
+  r.whisks = stats.poses;
   r.accuracy = accuracy;
   r.proposals = stats.proposals;
   r.peak_live_tables = stats.peak_live_tables;
@@ -558,18 +616,77 @@ Result<std::vector<SweepRow>> parseSweepRows(const std::string& text, const std:
   return rows;
 }
 
+namespace {
+
+// One curves.csv line into fields (the writer quotes a field holding a comma or a quote).
+std::vector<std::string> csvLineFields(const std::string& line) {
+  std::vector<std::string> out(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted && c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+      out.back() += '"';
+      ++i;
+    } else if (c == '"') {
+      quoted = !quoted;
+    } else if (c == ',' && !quoted) {
+      out.emplace_back();
+    } else {
+      out.back() += c;
+    }
+  }
+  return out;
+}
+
+// A shard's curves.csv back into the curves of its rows (by grid_index). Errors name the file.
+Status readShardCurves(const std::string& dir, std::vector<std::optional<SweepRow>>& slots) {
+  const std::string path = dir + "/curves.csv";
+  auto text = readFile(path);
+  if (!text) return Error{text.error().message + " (an explore shard writes one)"};
+  std::istringstream in(text.value());
+  std::string line, header;
+  for (size_t c = 0; c < kCurveColumns.size(); ++c) header += (c ? "," : "") + kCurveColumns[c];
+  if (!std::getline(in, line) || line != header)
+    return Error{path + ": line 1 is not curves.csv's header"};
+  for (int n = 2; std::getline(in, line); ++n) {
+    if (line.empty()) continue;
+    const std::vector<std::string> f = csvLineFields(line);
+    const std::string where = path + ": line " + std::to_string(n);
+    if (f.size() != kCurveColumns.size()) return Error{where + ": not " + std::to_string(kCurveColumns.size()) + " fields"};
+    try {
+      const size_t index = std::stoul(f[0]);
+      if (index >= slots.size() || !slots[index])
+        return Error{where + ": grid_index " + f[0] + " is not a row of its sweep.json"};
+      auto num = [](const std::string& s) {
+        return s == "null" ? std::numeric_limits<double>::quiet_NaN() : std::stod(s);
+      };
+      slots[index]->curve.push_back(
+          {num(f[7]), std::stoi(f[8]), num(f[9]), num(f[10]), num(f[11])});
+    } catch (const std::exception&) {
+      return Error{where + ": a number column does not read"};
+    }
+  }
+  return okStatus();
+}
+
+}  // namespace
+
 Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& dirs) {
   if (dirs.empty()) return Error{"no shard directories given"};
   std::optional<std::string> grid;
   std::optional<size_t> grid_size;
   std::string grid_from;
   std::vector<std::optional<SweepRow>> slots;
+  std::vector<std::string> explored_dirs;
   for (const std::string& dir : dirs) {
     const std::string path = dir + "/sweep.json";
     auto text = readFile(path);
     if (!text) return Error{text.error().message + " (not a sweep output directory)"};
     auto parsed = parseSweepRows(text.value(), path);
     if (!parsed) return parsed.error();
+    if (std::any_of(parsed.value().begin(), parsed.value().end(),
+                    [](const SweepRow& r) { return r.explore != "none"; }))
+      explored_dirs.push_back(dir);
     for (SweepRow& row : parsed.value()) {
       if (!grid) {
         grid = row.grid;
@@ -589,6 +706,9 @@ Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& d
       slots[index] = std::move(row);
     }
   }
+  // The explore rows' curves: every shard that holds an explore row has its curves.csv.
+  for (const std::string& dir : explored_dirs)
+    if (Status st = readShardCurves(dir, slots); !st) return st.error();
   if (!grid) return Error{"the shards hold no rows"};
   std::vector<SweepRow> rows;
   std::vector<size_t> missing;
@@ -607,11 +727,35 @@ Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& d
   return rows;
 }
 
+std::string sweepCurvesCsv(const std::vector<SweepRow>& rows) {
+  std::string out;
+  for (size_t c = 0; c < kCurveColumns.size(); ++c) out += (c ? "," : "") + kCurveColumns[c];
+  out += "\n";
+  for (const SweepRow& r : rows) {
+    for (size_t k = 0; k < r.curve.size(); ++k) {
+      const SweepCurvePoint& p = r.curve[k];
+      Json v = Json::array({r.grid_index, r.scene, r.model, r.explore, r.noise, r.seed, k,
+                            p.travel_m, p.whisks, p.recall, p.precision, p.f1, r.travel_m,
+                            r.accuracy.recall, r.accuracy.f1});
+      for (size_t c = 0; c < v.size(); ++c) {
+        if (c) out += ',';
+        out += csvField(v[c]);
+      }
+      out += "\n";
+    }
+  }
+  return out;
+}
+
 Status writeSweepFiles(const std::vector<SweepRow>& rows, const std::string& out_dir) {
   if (auto s = ensureDirectory(out_dir); !s) return s;
   const std::string dir = out_dir + "/";
   if (auto s = writeFileAtomic(dir + "sweep.csv", sweepRowsCsv(rows)); !s) return s;
-  return writeFileAtomic(dir + "sweep.json", sweepRowsJson(rows));
+  if (auto s = writeFileAtomic(dir + "sweep.json", sweepRowsJson(rows)); !s) return s;
+  const bool explored =
+      std::any_of(rows.begin(), rows.end(), [](const SweepRow& r) { return r.explore != "none"; });
+  if (!explored) return okStatus();
+  return writeFileAtomic(dir + "curves.csv", sweepCurvesCsv(rows));
 }
 
 }  // namespace crunch

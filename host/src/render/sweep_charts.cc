@@ -1,6 +1,7 @@
 #include "crunch/render/sweep_charts.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -319,6 +320,138 @@ SweepChartSet sweepCharts(const std::vector<SettingSummary>& all) {
     report << "\n";
   }
   out.summary_csv = sweepSummaryCsv(all, fronts);
+  out.report = report.str();
+  return out;
+}
+
+// ---- Exploration: recall and F1 against metres driven.
+
+namespace {
+
+// A fixed colour per policy name, so that a policy has the same colour in every chart.
+ChartColour policyColour(const std::string& explore) {
+  static const char* const kOrder[] = {"grid", "random", "frontier", "entropy", "infogain", "none"};
+  for (int i = 0; i < 6; ++i)
+    if (explore == kOrder[i]) return chartPalette(i);
+  int h = 0;
+  for (const char c : explore) h = (h * 31 + c) & 0xffff;
+  return chartPalette(6 + h % 2);
+}
+
+bool sameGroup(const ExploreSummary& a, const ExploreSummary& b) {
+  return a.scene == b.scene && a.model == b.model && a.noise == b.noise;
+}
+
+}  // namespace
+
+std::string exploreChartStem(const ExploreSummary& s) {
+  std::string stem = s.scene;
+  if (const auto slash = stem.find_last_of('/'); slash != std::string::npos)
+    stem = stem.substr(slash + 1);
+  if (stem.size() > 5 && stem.compare(stem.size() - 5, 5, ".json") == 0)
+    stem.resize(stem.size() - 5);
+  if (s.model != "paper") stem += "_" + s.model;
+  if (s.noise != "realistic") stem += "_" + s.noise;
+  return stem;
+}
+
+Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1) {
+  Chart c;
+  const ExploreSummary& h = group.front();
+  int runs = 0;
+  for (const ExploreSummary& s : group) runs = std::max(runs, s.runs);
+  const std::string what = f1 ? "F1" : "recall";
+  c.options.title = exploreChartStem(h) + ": " + what + " against metres driven, mean of " +
+                    std::to_string(runs) + " seeds (dashed +-1 sd; square: final map)";
+  c.options.x_label = "metres driven";
+  c.options.y_label = "fused-map " + what +
+                      std::string(f1 ? " (of precision and recall)" : " (tables found / real tables)");
+  c.options.width_px = 1000;
+  c.options.height_px = 620;
+  c.options.x_min = 0.0;
+  c.options.y_min = 0.0;
+  c.options.y_max = 1.3;  // room above 1 for the legend
+  c.options.legend = LegendPosition::kTopLeft;
+  if (!f1 && !h.travel.empty()) {
+    ChartSeries target;
+    target.label = "recall " + fmt("%g", h.recall_target) + " (issue 14's target)";
+    target.style = SeriesStyle::kLine;
+    target.colour = kBlack;
+    target.dashed = true;
+    target.line_width = 1.0;
+    target.x = {0.0, h.travel.back()};
+    target.y = {h.recall_target, h.recall_target};
+    c.series.push_back(target);
+  }
+  for (const ExploreSummary& s : group) {
+    const std::vector<double>& m = f1 ? s.f1_mean : s.recall_mean;
+    const std::vector<double>& d = f1 ? s.f1_sd : s.recall_sd;
+    ChartSeries line, lo, hi;
+    line.label = s.explore + " (" + std::to_string(s.runs) + " seeds; drove " +
+                 fmt("%.1f", s.final_travel_mean) + " m; curve " +
+                 fmt("%.2f", f1 ? s.final_f1_mean : s.final_recall_mean) + ")";
+    line.style = lo.style = hi.style = SeriesStyle::kLine;
+    line.colour = lo.colour = hi.colour = policyColour(s.explore);
+    lo.dashed = hi.dashed = true;
+    lo.line_width = hi.line_width = 1.0;
+    line.x = lo.x = hi.x = s.travel;
+    line.y = m;
+    for (size_t i = 0; i < m.size(); ++i) {
+      lo.y.push_back(std::max(0.0, m[i] - d[i]));
+      hi.y.push_back(std::min(1.0, m[i] + d[i]));
+    }
+    const double map_mean = f1 ? s.map_f1_mean : s.map_recall_mean;
+    const double map_sd = f1 ? s.map_f1_sd : s.map_recall_sd;
+    if (std::isfinite(map_mean)) line.label += ", final map " + fmt("%.2f", map_mean);
+    c.series.push_back(line);
+    if (s.runs > 1) {
+      c.series.push_back(lo);
+      c.series.push_back(hi);
+    }
+    if (std::isfinite(map_mean)) {
+      // The final fused map (global inference at the end): a square at the run's mean travel.
+      ChartSeries end;
+      end.style = SeriesStyle::kPoints;
+      end.marker = MarkerShape::kSquare;
+      end.marker_size = 6.0;
+      end.colour = line.colour;
+      end.x = {s.final_travel_mean};
+      end.y = {map_mean};
+      end.y_error = {map_sd};
+      c.series.push_back(end);
+    }
+  }
+  return c;
+}
+
+SweepChartSet exploreCharts(const std::vector<ExploreSummary>& all) {
+  SweepChartSet out;
+  std::ostringstream report;
+  std::vector<bool> done(all.size(), false);
+  for (size_t g = 0; g < all.size(); ++g) {
+    if (done[g]) continue;
+    std::vector<ExploreSummary> group;
+    for (size_t k = g; k < all.size(); ++k) {
+      if (!done[k] && sameGroup(all[g], all[k])) {
+        group.push_back(all[k]);
+        done[k] = true;
+      }
+    }
+    const std::string stem = exploreChartStem(all[g]);
+    out.charts.push_back({"explore_" + stem + "_recall", exploreChart(group, false)});
+    out.charts.push_back({"explore_" + stem + "_f1", exploreChart(group, true)});
+    report << "explore " << stem << ":";
+    for (const ExploreSummary& s : group) {
+      report << " " << s.explore << " recall " << fmt("%.2f", s.final_recall_mean) << " after "
+             << fmt("%.1f", s.final_travel_mean) << " m";
+      if (std::isfinite(s.mean_curve_travel_to_target))
+        report << " (mean >= " << fmt("%g", s.recall_target) << " at "
+               << fmt("%.1f", s.mean_curve_travel_to_target) << " m)";
+      report << ";";
+    }
+    report << "\n";
+  }
+  out.summary_csv = exploreSummaryCsv(all);
   out.report = report.str();
   return out;
 }

@@ -1,6 +1,9 @@
 // Running a sweep's grid points (`crunchhost sweep`; the grid, rows and files are
 // mapping/sweep.h): each point is one simulated run (sim_run.h) with the gaussian sensor at the
-// point's noise and settings, evaluated against its scene, on worker threads.
+// point's noise and settings, evaluated against its scene, on worker threads. A point of the
+// explore axis is the driven run of `crunchhost --sim --explore NAME` with the grid's budgets
+// (SimRunOptions::explore); its row carries the run's travel and whisks, and its
+// recall-against-travel curve (SimRun::exploration->curve) for curves.csv.
 //
 // Determinism: a run draws only from its own seed, so the same grid point gives the same row
 // whatever the job count, the shard or the completion order; only wall_s, process_peak_rss_kib
@@ -15,8 +18,11 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
+#include <string>
 #include <vector>
 
+#include "crunch/exploration/exploration.h"
 #include "crunch/mapping/sweep.h"
 
 namespace crunch::sim {
@@ -26,7 +32,17 @@ struct SweepRunResult {
   int jobs = 1;                // worker threads used
 };
 
-// Runs every point of `grid` that `shard` holds. An Error names the first grid point whose run
+// The settings of the grid's explore value `explore`: nullopt for "none" (the pose list,
+// teleported); otherwise the policy named (exploration::explorePolicyByName) with the grid's
+// travel and whisk budgets, checked by ExploreOptions::validate. Errors name --explore,
+// --travel-budget or --whisk-budget.
+Result<std::optional<exploration::ExploreOptions>> sweepExploreOptions(const SweepGrid& grid,
+                                                                       const std::string& explore);
+// Every explore value of the grid through sweepExploreOptions: `crunchhost sweep` checks this
+// before it runs anything (mapping/sweep.h cannot: it does not link the exploration library).
+Status validateSweepExplore(const SweepGrid& grid);
+
+// Runs every point of `grid` that `shard` holds (after validateSweepExplore). An Error names the first grid point whose run
 // failed ("grid point N: ...").
 Result<SweepRunResult> runSweepPoints(const SweepGrid& grid, const SweepShard& shard, int jobs,
                                       const std::function<void(size_t, size_t)>& progress);

@@ -10,6 +10,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -91,5 +93,69 @@ std::vector<std::string> sweepModels(const std::vector<SettingSummary>& all);
 // on the wall-time and on the proposals Pareto front of its noise regime.
 std::string sweepSummaryCsv(const std::vector<SettingSummary>& all,
                             const std::vector<NoiseFronts>& fronts);
+
+// ---- Exploration (issue 14): recall and F1 against metres driven, from a `sweep --explore`
+// run's curves.csv (mapping/sweep.h kCurveColumns; one line per whisk of every explore run).
+
+// One explore run's curve: its points in whisk order (travel non-decreasing).
+struct ExploreCurve {
+  std::string scene, model, explore, noise;
+  std::uint64_t seed = 0;
+  std::vector<double> travel_m, recall, precision, f1;
+  std::vector<int> whisks;
+  // Metres the run drove in all (curves.csv run_travel_m; without the column, the last whisk's).
+  double run_travel_m = 0.0;
+  // The run's final fused map (curves.csv run_recall, run_f1; NaN without the columns).
+  double run_recall = std::numeric_limits<double>::quiet_NaN();
+  double run_f1 = std::numeric_limits<double>::quiet_NaN();
+};
+
+// curves.csv's text into its runs, grouped by (scene, model, explore, noise, seed) in order of
+// first appearance. Checks: a header holding every kCurveColumns name, each line as many fields
+// as the header, numbers where numbers belong (recall, precision, f1 in [0, 1] or empty/null for
+// precision; travel_m finite and >= 0 and non-decreasing within a run). Errors name `source`,
+// the line (1-based) and the column.
+Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
+                                                     const std::string& source);
+// The file at `path` through parseExploreCurves; an Error naming it when it cannot be read or
+// holds no curve point.
+Result<std::vector<ExploreCurve>> loadExploreCurves(const std::string& path);
+
+// A run's value at `travel` metres: a step function of travel, the value after the last whisk
+// made at or before `travel`; 0 before the first whisk (nothing is mapped yet); the last value
+// held after the run ended. Requires equal lengths, travel non-decreasing.
+double curveValueAt(const std::vector<double>& travel, const std::vector<double>& value,
+                    double at);
+
+// One policy on one (scene, model, noise), over its seeds: recall and F1 on a common travel
+// axis (shared by every policy of the same scene, model and noise: 0 to the longest run's
+// run_travel_m, evenly spaced), mean and sample sd (n - 1; 0 for one seed) over the seeds at each
+// travel; the runs' final figures; and how far each seed drove before its fused map first
+// reached recall >= recall_target.
+struct ExploreSummary {
+  std::string scene, model, noise, explore;
+  int runs = 0;
+  std::vector<double> travel;  // the common axis, metres
+  std::vector<double> recall_mean, recall_sd, f1_mean, f1_sd;
+  double final_travel_mean = 0.0;  // run_travel_m
+  double final_whisks_mean = 0.0;
+  double final_recall_mean = 0.0, final_recall_sd = 0.0, final_f1_mean = 0.0, final_f1_sd = 0.0;
+  // The runs' final fused maps (run_recall, run_f1), mean and sd over seeds; NaN if not given.
+  double map_recall_mean = 0.0, map_recall_sd = 0.0, map_f1_mean = 0.0, map_f1_sd = 0.0;
+  double recall_target = 0.9;
+  int reached = 0;  // seeds whose recall reached the target
+  // Mean over the seeds that reached it of the travel at which each first did (NaN: none did).
+  double travel_to_target_mean = 0.0;
+  // The travel at which the MEAN recall curve first reaches the target (NaN: never).
+  double mean_curve_travel_to_target = 0.0;
+};
+
+// Per (scene, model, noise), then per explore value, in order of first appearance. `samples`
+// >= 2 points on each travel axis.
+std::vector<ExploreSummary> exploreSummaries(const std::vector<ExploreCurve>& curves,
+                                             int samples = 201, double recall_target = 0.9);
+
+// explore_summary.csv: one row per summary with its final and travel-to-target figures.
+std::string exploreSummaryCsv(const std::vector<ExploreSummary>& all);
 
 }  // namespace crunch

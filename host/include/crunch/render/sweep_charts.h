@@ -15,6 +15,13 @@
 //    +-1 sd over seeds) and precision (mean) against sigma_r in mm, at one sampler setting
 //    (noiseLevels), one set of lines per object model, with the paper's "realistic" (5 mm, pi/32) and "very noisy" (25 mm, pi/8)
 //    levels marked as vertical lines.
+//  - explore_<scene>_recall and explore_<scene>_f1 (issue 14; from a `sweep --explore` run's
+//    curves.csv, exploreSummaries): the fused map's recall (F1) against metres driven, one line
+//    per exploration policy (mean over seeds, dashed lines at mean +-1 sample sd), one chart per
+//    scene (and model / noise regime other than paper / realistic: their names are appended).
+//    The recall chart marks the issue's target recall 0.9; a square (+-1 sd) at each policy's
+//    mean travel marks its runs' final fused map (global inference at the end), when curves.csv
+//    has run_recall / run_f1.
 // Pure functions: nothing is written here.
 #pragma once
 
@@ -50,5 +57,18 @@ struct SweepChartSet {
   std::string report;
 };
 SweepChartSet sweepCharts(const std::vector<SettingSummary>& all);
+
+// One (scene, model, noise) group's policies (ExploreSummary entries sharing their travel
+// axis), recall (f1 false) or F1 against travel.
+Chart exploreChart(const std::vector<ExploreSummary>& group, bool f1);
+
+// The stem of a group's chart files: the scene file's stem ("default" for the built-in arena),
+// then "_<model>" unless paper, "_<noise>" unless realistic.
+std::string exploreChartStem(const ExploreSummary& s);
+
+// Every exploration chart (explore_<stem>_recall, explore_<stem>_f1), explore_summary.csv's text
+// and a report: per scene, each policy's final recall and the travel at which its mean recall
+// first reaches the target.
+SweepChartSet exploreCharts(const std::vector<ExploreSummary>& all);
 
 }  // namespace crunch
