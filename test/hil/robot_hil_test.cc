@@ -359,6 +359,9 @@ void exploresToChosenPoses(const std::string& policy, int seconds) {
   CHECK(rep["exploration"]["policy"] == policy);
   CHECK(rep["exploration"]["whisks"].get<int>() >= at_goal);
   CHECK(rep["exploration"]["curve"].empty());
+  CHECK(rep["exploration"]["stop_reason"] == "--duration reached");
+  CHECK(rep["exploration"]["decision_ms"].get<double>() > 0.0);
+  CHECK(rep["exploration"]["sim_time_s"].get<double>() > 0.5 * seconds);
   checkReplaySameMap(out, dir.path() / "replay");
 }
 

@@ -86,6 +86,9 @@ void RobotController::fail(const Error& error) {
 
 bool RobotController::end(const std::string& reason) {
   stop_reason_ = reason;
+  // The exploring loop's report closes with the run's reason (its time, mean decision time);
+  // a loop that ended by itself keeps its own.
+  if (explore_) explore_->finish(reason);
   stage_ = Stage::kStopped;
   return false;
 }
