@@ -270,22 +270,13 @@ int runTopLevel(TopLevel& t, RobotOptions& ropt) {
                    "--start-x, --start-y, --start-theta)\n";
       return 2;
     }
-    if (opt.explore) {
-      auto kind = crunch::exploration::explorePolicyByName(*opt.explore);
-      if (!kind) {
-        std::cerr << "crunchhost: " << kind.error().message << "\n";
-        return 2;
-      }
-      crunch::exploration::ExploreOptions e;
-      e.policy = kind.value();
-      if (opt.travel_budget) e.travel_budget_m = *opt.travel_budget;
-      if (opt.whisk_budget) e.whisk_budget = *opt.whisk_budget;
-      ropt.explore = e;
-    } else if (opt.travel_budget || opt.whisk_budget) {
-      std::cerr << "crunchhost: " << (opt.travel_budget ? "--travel-budget" : "--whisk-budget")
-                << ": needs --explore POLICY\n";
+    auto explore = crunch::exploration::exploreOptionsFromFlags(opt.explore, opt.travel_budget,
+                                                                opt.whisk_budget);
+    if (!explore) {
+      std::cerr << "crunchhost: " << explore.error().message << "\n";
       return 2;
     }
+    ropt.explore = explore.value();
     ropt.out_dir = opt.out_dir;
     ropt.seed = opt.seed;
     ropt.models_path = opt.models_path;

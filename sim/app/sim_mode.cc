@@ -31,18 +31,12 @@ Result<Pose2> parseStart(const std::string& text) {
 Result<std::optional<exploration::ExploreOptions>> exploreOptions(const SimOptions& opt) {
   if (!opt.explore) {
     if (opt.teleport) return Error{"--teleport: needs --explore POLICY"};
-    if (opt.travel_budget) return Error{"--travel-budget: needs --explore POLICY"};
-    if (opt.whisk_budget) return Error{"--whisk-budget: needs --explore POLICY"};
     if (opt.start) return Error{"--start: needs --explore POLICY"};
-    return std::optional<exploration::ExploreOptions>{};
   }
-  exploration::ExploreOptions e;
-  auto kind = exploration::explorePolicyByName(*opt.explore);
-  if (!kind) return kind.error();
-  e.policy = kind.value();
+  auto flags = exploration::exploreOptionsFromFlags(opt.explore, opt.travel_budget, opt.whisk_budget);
+  if (!flags || !flags.value()) return flags;
+  exploration::ExploreOptions e = *flags.value();
   e.teleport = opt.teleport;
-  if (opt.travel_budget) e.travel_budget_m = *opt.travel_budget;
-  if (opt.whisk_budget) e.whisk_budget = *opt.whisk_budget;
   if (opt.start) {
     auto start = parseStart(*opt.start);
     if (!start) return start.error();

@@ -39,3 +39,26 @@ TEST_CASE("explorePolicyByName: the five names round-trip, others name --explore
   CHECK(bad.error().message.find("--explore") != std::string::npos);
   CHECK(bad.error().message.find("spiral") != std::string::npos);
 }
+
+TEST_CASE("exploreOptionsFromFlags: no policy is no exploration; budgets need one and are checked",
+          "[exploration]") {
+  using crunch::exploration::exploreOptionsFromFlags;
+  const auto none = exploreOptionsFromFlags(std::nullopt, std::nullopt, std::nullopt);
+  REQUIRE(none);
+  CHECK_FALSE(none.value().has_value());
+  const auto orphan = exploreOptionsFromFlags(std::nullopt, 10.0, std::nullopt);
+  REQUIRE_FALSE(orphan);
+  CHECK(orphan.error().message.find("--travel-budget") != std::string::npos);
+  const auto unknown = exploreOptionsFromFlags(std::string("wander"), std::nullopt, std::nullopt);
+  REQUIRE_FALSE(unknown);
+  CHECK(unknown.error().message.find("--explore") != std::string::npos);
+  const auto negative = exploreOptionsFromFlags(std::string("frontier"), std::nullopt, -2);
+  REQUIRE_FALSE(negative);
+  CHECK(negative.error().message.find("--whisk-budget") != std::string::npos);
+  const auto ok = exploreOptionsFromFlags(std::string("infogain"), 12.5, 40);
+  REQUIRE(ok);
+  REQUIRE(ok.value().has_value());
+  CHECK(ok.value()->policy == crunch::exploration::ExplorePolicyKind::kInfogain);
+  CHECK(ok.value()->travel_budget_m == 12.5);
+  CHECK(ok.value()->whisk_budget == 40);
+}

@@ -73,4 +73,22 @@ nlohmann::ordered_json explorationJson(const ExplorationReport& x) {
 }
 
 
+Result<std::optional<ExploreOptions>> exploreOptionsFromFlags(
+    const std::optional<std::string>& policy, std::optional<double> travel_budget_m,
+    std::optional<int> whisk_budget) {
+  if (!policy) {
+    if (travel_budget_m) return Error{"--travel-budget: needs --explore POLICY"};
+    if (whisk_budget) return Error{"--whisk-budget: needs --explore POLICY"};
+    return std::optional<ExploreOptions>{};
+  }
+  auto kind = explorePolicyByName(*policy);
+  if (!kind) return kind.error();
+  ExploreOptions e;
+  e.policy = kind.value();
+  if (travel_budget_m) e.travel_budget_m = *travel_budget_m;
+  if (whisk_budget) e.whisk_budget = *whisk_budget;
+  if (auto st = e.validate(); !st) return st.error();
+  return std::optional<ExploreOptions>{e};
+}
+
 }  // namespace crunch::exploration

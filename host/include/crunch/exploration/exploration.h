@@ -72,6 +72,13 @@ Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOpt
                 std::span<const Pose2> grid_poses, int whisks, double travel_m, bool teleport,
                 Rng& rng, double* decision_ms);
 
+// The command line's --explore POLICY [--travel-budget M] [--whisk-budget N], shared by --sim and
+// --robot (each adds its own flags): nullopt without a policy; an Error naming the flag for an
+// unknown policy, a budget without --explore, or a budget validate() refuses.
+Result<std::optional<ExploreOptions>> exploreOptionsFromFlags(
+    const std::optional<std::string>& policy, std::optional<double> travel_budget_m,
+    std::optional<int> whisk_budget);
+
 // report.json `exploration`: every field above but the path, whisk poses and bump points
 // (map.png draws those); the curve as [{travel_m, whisks, recall, precision, f1}].
 nlohmann::ordered_json explorationJson(const ExplorationReport& report);
