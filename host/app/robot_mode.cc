@@ -285,6 +285,11 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
 
 int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
   const auto t0 = std::chrono::steady_clock::now();
+  // A --out that cannot take the outputs is refused before the replay, not after it.
+  if (Status s = checkOutputTargets(opt.out_dir, {"map.json", "map.png", "report.json"}); !s) {
+    err << "crunchhost: --replay: --out " << s.error().message << "\n";
+    return 2;
+  }
   auto replayed = session::replayRecording(opt.recording);
   if (!replayed) {  // the header or the settings: nothing written
     err << "crunchhost: --replay: " << replayed.error().message << "\n";

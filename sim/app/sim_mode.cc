@@ -138,6 +138,11 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: " << ro.error().message << "\n";
     return 2;
   }
+  // A --out that cannot take the outputs is refused before the run, not after it.
+  if (Status s = checkOutputTargets(opt.out_dir, {"map.json", "map.png", "report.json"}); !s) {
+    err << "crunchhost: --out " << s.error().message << "\n";
+    return 2;
+  }
   PoseProgress bar(opt.json_progress ? out : err, opt.json_progress);
   ro.value().mapping.progress = [&bar](int done, int total) { bar(done, total); };
   const sim::SimScene scene = sim::SimScene::build(std::move(loaded).value());

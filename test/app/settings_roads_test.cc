@@ -96,6 +96,36 @@ TEST_CASE("Settings: a bad seed or scene file is exit 2, named, nothing written 
   for (const Case& c : cases) expectRefused("--sim", c);
 }
 
+TEST_CASE("Settings: an --out that cannot take the outputs is exit 2 before the run, nothing "
+          "written (issue 16)", "[settings]") {
+  TempDir dir;
+  // --out on a file.
+  const std::string file = dir.file("a_file");
+  FILE* f = std::fopen(file.c_str(), "w");
+  REQUIRE(f != nullptr);
+  std::fclose(f);
+  Run r = run("--sim --out " + file);
+  INFO(r.output);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains(file + ": cannot write output: exists and is not a directory"));
+  CHECK_THAT(r.output, !Catch::Contains("poses"));  // refused before the run (no progress)
+  // map.png is a directory: nothing else is written either.
+  const std::string out = dir.file("out");
+  std::filesystem::create_directories(out + "/map.png");
+  r = run("--sim --out " + out);
+  CHECK(r.exit_code == 2);
+  CHECK_THAT(r.output, Catch::Contains(out + "/map.png: cannot write output: is a directory"));
+  CHECK_FALSE(std::filesystem::exists(out + "/map.json"));
+  CHECK_FALSE(std::filesystem::exists(out + "/report.json"));
+  // A 1e308 m arena: refused as a scene error, not after the run by the picture.
+  const std::string huge = dir.file("huge.json");
+  f = std::fopen(huge.c_str(), "w");
+  REQUIRE(f != nullptr);
+  std::fputs(R"({"arena": {"width": 1e308, "depth": 2.5}})", f);
+  std::fclose(f);
+  expectRefused("--sim", Case{("--scene " + huge).c_str(), "arena.width: 1e+308 m is more than"});
+}
+
 TEST_CASE("Settings: a bad --explore setting is exit 2, named, nothing written", "[settings]") {
   const Case c = GENERATE(Case{"--explore spiral", "--explore: unknown policy 'spiral'"},
                           Case{"--explore random --travel-budget -1", "--travel-budget -1"},

@@ -203,6 +203,29 @@ TEST_CASE("Render: PNG has the signature and arena size times scale plus margins
         MapCanvas::kMarginTop + 4.0 * 150 + MapCanvas::kMarginBottom);
 }
 
+TEST_CASE("Render: a large arena is drawn smaller, within max_picture_px", "[render]") {
+  TempDir dir;
+  Scene scene = makeScene();
+  scene.width = 200.0;  // kMaxArenaSide: at 200 px/m a 40000 px picture
+  scene.depth = 50.0;
+  const Map map = makeMap(scene);
+  const std::string path = dir.file("map.png");
+  RenderOptions options;  // 200 px/m, at most 8192 px a side
+  REQUIRE(renderMapPng(map, scene, path, options).ok());
+  SurfacePtr image = loadPng(path);
+  REQUIRE(cairo_surface_status(image.get()) == CAIRO_STATUS_SUCCESS);
+  CHECK(cairo_image_surface_get_width(image.get()) == options.max_picture_px);
+  const double ppm = (options.max_picture_px - MapCanvas::kMarginLeft - MapCanvas::kMarginRight) / 200.0;
+  CHECK(cairo_image_surface_get_height(image.get()) ==
+        static_cast<int>(MapCanvas::kMarginTop + 50.0 * ppm + MapCanvas::kMarginBottom));
+  // A max_picture_px out of range is an Error naming it; no file.
+  options.max_picture_px = 40000;
+  const Status bad = renderMapPng(map, scene, dir.file("bad.png"), options);
+  REQUIRE_FALSE(bad.ok());
+  CHECK(bad.error().message.find("max_picture_px") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir.file("bad.png")));
+}
+
 TEST_CASE("Render: truth legs are dark, fused edges blue, empty arena white", "[render]") {
   TempDir dir;
   const SimpleCase c = makeSimpleCase();
@@ -309,7 +332,7 @@ TEST_CASE("Render: a failed render leaves an existing picture untouched", "[rend
   const std::string before = readFile(path);
 
   RenderOptions bad;
-  bad.pixels_per_metre = 1e6;  // far past cairo's 32767 px limit
+  bad.max_picture_px = 40000;  // past cairo's 32767 px limit (a large scale is fitted, not refused)
   const Status st = renderMapPng(c.map, c.scene, path, bad);
   REQUIRE_FALSE(st.ok());
   CHECK_THAT(st.error().message, Catch::Contains(path));

@@ -53,6 +53,14 @@ std::string withTables(const std::string& tables) {
 // ---------------------------------------------------------------------------------------------
 // Geometry helpers.
 
+TEST_CASE("Scene: an arena side above 200 m is refused naming it, 200 m is fine (issue 16)",
+          "[scene]") {
+  requireError(R"({"arena": {"width": 1e308, "depth": 2.5}})", "arena.width",
+               "more than the 200 m a side an arena may have");
+  requireError(R"({"arena": {"width": 3, "depth": 200.5}})", "arena.depth", "200.5 m is more");
+  CHECK(crunch::parseScene(R"({"arena": {"width": 200, "depth": 200}})", "s.json").ok());
+}
+
 TEST_CASE("Scene: legs sit flush in the four corners of the top, in corner order", "[scene]") {
   TableSpec t;
   t.pose = {1.5, 2.0, 0.7};

@@ -114,6 +114,39 @@ Status writeFileAtomic(const std::string& path, std::string_view contents) {
   return file.value().commit();
 }
 
+Status checkOutputTargets(const std::string& dir, std::initializer_list<const char*> names) {
+  if (dir.empty()) return Error{"output directory: the name is empty"};
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path d(dir);
+  if (fs::exists(d, ec)) {
+    if (!fs::is_directory(d, ec)) {
+      return Error{dir + ": cannot write output: exists and is not a directory"};
+    }
+    if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+      return Error{dir + ": cannot write output: " + std::strerror(errno)};
+    }
+    for (const char* name : names) {
+      const fs::path target = d / name;
+      if (fs::is_directory(target, ec)) {
+        return Error{target.string() + ": cannot write output: is a directory"};
+      }
+    }
+    return okStatus();
+  }
+  // Absent: the nearest existing ancestor must be a directory we may create entries in.
+  fs::path up = fs::absolute(d, ec).parent_path();
+  while (!up.empty() && !fs::exists(up, ec) && up != up.root_path()) up = up.parent_path();
+  if (!fs::is_directory(up, ec)) {
+    return Error{dir + ": cannot write output: " + up.string() + " is not a directory"};
+  }
+  if (::access(up.c_str(), W_OK | X_OK) != 0) {
+    return Error{dir + ": cannot write output: cannot create it in " + up.string() + ": " +
+                 std::strerror(errno)};
+  }
+  return okStatus();
+}
+
 Status ensureDirectory(const std::string& dir) {
   if (dir.empty()) return Error{"output directory: the name is empty"};
   std::error_code ec;

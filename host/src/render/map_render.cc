@@ -52,27 +52,35 @@ Error pictureFileError(const std::string& path, const std::string& why) {
   return pictureError(path, "error while writing: " + why);
 }
 
-Status checkInputs(const Scene& truth, const std::string& path, const RenderOptions& options) {
+// The canvas for `truth` after checking the inputs: options.pixels_per_metre, lowered so that
+// the picture's larger side stays within options.max_picture_px (a 200 m arena at the default
+// 200 px/m would be a 40000 px, 6 GB picture; issue 16).
+Result<MapCanvas> canvasFor(const Scene& truth, const std::string& path,
+                            const RenderOptions& options) {
   if (path.empty()) return Error{"cannot write map picture: the output path is empty"};
   if (!std::isfinite(options.pixels_per_metre) || options.pixels_per_metre <= 0) {
     return pictureError(path, "pixels_per_metre must be finite and > 0, got " +
                                   std::to_string(options.pixels_per_metre));
   }
+  const int margin_w = MapCanvas::kMarginLeft + MapCanvas::kMarginRight;
+  const int margin_h = MapCanvas::kMarginTop + MapCanvas::kMarginBottom;
+  if (options.max_picture_px < std::max(margin_w, margin_h) + 100 ||
+      options.max_picture_px > kMaxPicturePx) {
+    std::string why = "max_picture_px must be ";
+    why.append(std::to_string(std::max(margin_w, margin_h) + 100))
+        .append(" to ")
+        .append(std::to_string(kMaxPicturePx))
+        .append(", got ")
+        .append(std::to_string(options.max_picture_px));
+    return pictureError(path, why);
+  }
   if (!std::isfinite(truth.width) || !std::isfinite(truth.depth) || truth.width <= 0 ||
       truth.depth <= 0) {
     return pictureError(path, "the arena of scene '" + truth.source + "' has no positive size");
   }
-  const double w =
-      (truth.width * options.pixels_per_metre) + MapCanvas::kMarginLeft + MapCanvas::kMarginRight;
-  const double h =
-      (truth.depth * options.pixels_per_metre) + MapCanvas::kMarginTop + MapCanvas::kMarginBottom;
-  if (w > kMaxPicturePx || h > kMaxPicturePx) {
-    return pictureError(path, "a " + std::to_string(std::lround(w)) + " x " +
-                                  std::to_string(std::lround(h)) +
-                                  " px picture exceeds cairo's limit of " +
-                                  std::to_string(kMaxPicturePx) + " px; lower pixels_per_metre");
-  }
-  return okStatus();
+  const double fit = std::min((options.max_picture_px - margin_w) / truth.width,
+                              (options.max_picture_px - margin_h) / truth.depth);
+  return MapCanvas(truth.width, truth.depth, std::min(options.pixels_per_metre, fit));
 }
 
 // ---- Drawing primitives ------------------------------------------------------------------------
@@ -789,16 +797,18 @@ Status writeSvg(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
 
 Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
                     const RenderOptions& options) {
-  if (Status s = checkInputs(truth, path, options); !s) return s;
-  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+  auto fitted = canvasFor(truth, path, options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
   return writePng(canvas, path,
                   [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
 }
 
 Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
                     const RenderOptions& options) {
-  if (Status s = checkInputs(truth, path, options); !s) return s;
-  const MapCanvas canvas(truth.width, truth.depth, options.pixels_per_metre);
+  auto fitted = canvasFor(truth, path, options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
   return writeSvg(canvas, path,
                   [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
 }
@@ -807,8 +817,9 @@ Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre) {
   RenderOptions options;
   options.pixels_per_metre = pixels_per_metre;
-  if (Status s = checkInputs(truth, path, options); !s) return s;
-  const MapCanvas canvas(truth.width, truth.depth, pixels_per_metre);
+  auto fitted = canvasFor(truth, path, options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
   return writePng(canvas, path, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
 }
 
@@ -816,8 +827,9 @@ Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre) {
   RenderOptions options;
   options.pixels_per_metre = pixels_per_metre;
-  if (Status s = checkInputs(truth, path, options); !s) return s;
-  const MapCanvas canvas(truth.width, truth.depth, pixels_per_metre);
+  auto fitted = canvasFor(truth, path, options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
   return writeSvg(canvas, path, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
 }
 

@@ -138,6 +138,12 @@ void parseArena(const json& doc, Scene& s) {
   expectObject(*it, "arena", {"width", "depth"});
   s.width = positive(requiredNumber(*it, "arena", "width"), "arena.width");
   s.depth = positive(requiredNumber(*it, "arena", "depth"), "arena.depth");
+  for (const auto& [side, name] : {std::pair{s.width, "arena.width"}, std::pair{s.depth, "arena.depth"}}) {
+    if (side > kMaxArenaSide) {
+      fail(name, fmt(side) + " m is more than the " + fmt(kMaxArenaSide) +
+                     " m a side an arena may have (a run's memory and time grow with it)");
+    }
+  }
 }
 
 void parseTables(const json& doc, Scene& s) {

@@ -4,6 +4,7 @@
 // report.json, models files, map pictures and charts.
 #pragma once
 
+#include <initializer_list>
 #include <string>
 #include <string_view>
 
@@ -70,5 +71,11 @@ Status writeFileAtomic(const std::string& path, std::string_view contents);
 // Creates `dir` and any missing parents; succeeds if it already is a directory. The Error names
 // the directory.
 Status ensureDirectory(const std::string& dir);
+
+// Whether a run can write `names` into `dir`, checked before the run starts so that a bad --out
+// costs nothing (issue 16): `dir` is absent (it will be created: its nearest existing ancestor
+// must be a writable directory) or a writable directory, and no `dir/name` is a directory. Creates
+// nothing. The Error names the path: "<path>: cannot write output: <why>".
+Status checkOutputTargets(const std::string& dir, std::initializer_list<const char*> names);
 
 }  // namespace crunch

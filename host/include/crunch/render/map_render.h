@@ -26,6 +26,9 @@ namespace crunch {
 
 struct RenderOptions {
   double pixels_per_metre = 200;  // arena scale; must be finite and > 0
+  // The picture's larger side at most (pixels): a large arena is drawn at a lower scale than
+  // pixels_per_metre. From the margins + 100 to cairo's limit of 32767.
+  int max_picture_px = 8192;
   bool draw_shapelets = true;
   bool draw_per_pose = true;  // the collated per-pose MAP tables (Figs. 11-13)
   bool draw_fused = true;     // the fused map (Map::tables)

@@ -10,6 +10,10 @@
 
 namespace crunch {
 
+// The largest arena side a scene may give (metres): a run's memory (the free-space grid) and time
+// grow with the arena, so a bound keeps both predictable; 200 m is far beyond any room (issue 16).
+inline constexpr double kMaxArenaSide = 200.0;
+
 // The paper's standard table (§2.8, Fig. 6): 0.80 x 0.50 m top, 0.05 m square legs.
 inline constexpr double kStandardTableWidth = 0.80;
 inline constexpr double kStandardTableDepth = 0.50;
