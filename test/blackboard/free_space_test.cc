@@ -2,6 +2,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
+#include "crunch/core/rng.h"
+#include "free_space_scan.h"
+
 using namespace crunch;
 
 TEST_CASE("FreeSpace: a ray through a leg's core counts, one grazing its outline does not",
@@ -27,4 +32,109 @@ TEST_CASE("FreeSpace: each ray counts once per cell, outside the grid is zero", 
   CHECK(g.rays() == 3);
   g.addRay({{-5, -5}, {-4, -4}});  // wholly outside: harmless
   CHECK(g.rays() == 4);
+}
+
+namespace {
+
+// Adds `n` zero-length rays at the centre of cell (ix, iy): n passes through that cell alone.
+void passCell(FreeSpaceGrid& g, int ix, int iy, int n) {
+  const Vec2 c = g.origin() + Vec2{(ix + 0.5) * g.cell(), (iy + 0.5) * g.cell()};
+  for (int i = 0; i < n; ++i) g.addRay({c, c});
+}
+
+// A random query: anywhere over the grid and a little beyond, any angle (the exact quarter
+// turns among them), cores from a point up to 40 cells across.
+struct Query {
+  Pose2 pose;
+  double side, margin;
+};
+Query randomQuery(Rng& rng, const FreeSpaceGrid& g) {
+  const double w = g.cellsX() * g.cell(), h = g.cellsY() * g.cell();
+  static constexpr double kTurns[] = {0.0, kPi / 2, kPi, -kPi / 2, kPi / 4, -3 * kPi / 4};
+  Query q;
+  q.pose.x = g.origin().x() + rng.uniform(-0.1 * w, 1.1 * w);
+  q.pose.y = g.origin().y() + rng.uniform(-0.1 * h, 1.1 * h);
+  q.pose.theta = rng.below(4) == 0 ? kTurns[rng.below(6)] : rng.uniform(-4 * kPi, 4 * kPi);
+  q.side = rng.uniform(0.0, 40.0 * g.cell());
+  q.margin = rng.below(5) == 0 ? 0.0 : rng.uniform(0.0, 0.5 * q.side);
+  return q;
+}
+
+}  // namespace
+
+TEST_CASE("FreeSpace: the look-up equals the brute-force scan over random rays and cores",
+          "[mapping]") {
+  // Whisker-like rays (a few cm to a metre) pile up into counts of 0..~40; the cores land on
+  // empty space, inside swept space and across its edges, which is where the look-up's bounds
+  // disagree and it visits rows.
+  struct Layout {
+    Vec2 lo, hi;
+    double cell;
+  };
+  const Layout layouts[] = {{{0, 0}, {1, 1}, 0.01}, {{-0.37, 0.21}, {0.9, 1.05}, 0.013},
+                            {{2.0, -3.0}, {6.0, 1.0}, 0.05}};
+  Rng rng(15);
+  for (const Layout& l : layouts) {
+    FreeSpaceGrid g(l.lo, l.hi, l.cell);
+    const Vec2 span = l.hi - l.lo;
+    int nonzero = 0, checked = 0;
+    for (int batch = 0; batch < 12; ++batch) {
+      for (int r = 0; r < 25; ++r) {
+        const Vec2 a = l.lo + Vec2{rng.uniform() * span.x(), rng.uniform() * span.y()};
+        const double len = rng.uniform(0.02, 0.6 * span.x()), dir = rng.uniform(-kPi, kPi);
+        g.addRay({a, a + len * Vec2{std::cos(dir), std::sin(dir)}});
+      }
+      for (int k = 0; k < 1500; ++k) {
+        const Query q = randomQuery(rng, g);
+        const int want = test::scanMaxInSquare(g, q.pose, q.side, q.margin);
+        const int got = g.maxInSquare(q.pose, q.side, q.margin);
+        if (got != want) {
+          FAIL_CHECK("pose " << q.pose.x << "," << q.pose.y << "," << q.pose.theta << " side "
+                             << q.side << " margin " << q.margin << ": " << got << " vs scan "
+                             << want);
+        }
+        nonzero += want > 0;
+        ++checked;
+      }
+    }
+    CHECK(checked == 12 * 1500);
+    CHECK(nonzero > checked / 4);  // the test saw swept space, not only empty cores
+  }
+}
+
+TEST_CASE("FreeSpace: cores whose outline runs through cell centres match the scan",
+          "[mapping]") {
+  // Every cell 0..4 passes at random, so neighbouring cells differ and the bounds rarely agree;
+  // cores centred on cell centres and corners, square to the grid or at 45 degrees, with
+  // half-sides of whole and half cells: their outlines pass exactly through rows of centres,
+  // where only the scan's own arithmetic decides.
+  FreeSpaceGrid g({0, 0}, {0.4, 0.4}, 0.01);
+  Rng rng(7);
+  for (int iy = 0; iy < g.cellsY(); ++iy)
+    for (int ix = 0; ix < g.cellsX(); ++ix) passCell(g, ix, iy, static_cast<int>(rng.below(5)));
+  int checked = 0;
+  for (int k = 0; k < 4000; ++k) {
+    const double cx = 0.005 * rng.below(80), cy = 0.005 * rng.below(80);
+    const double theta = (kPi / 4) * (static_cast<int>(rng.below(9)) - 4);
+    const double h = 0.005 * (1 + rng.below(10));
+    const Pose2 pose{cx, cy, theta};
+    const int want = test::scanMaxInSquare(g, pose, 2 * h, 0.0);
+    const int got = g.maxInSquare(pose, 2 * h, 0.0);
+    if (got != want) {
+      FAIL_CHECK("pose " << cx << "," << cy << "," << theta << " half-side " << h << ": " << got
+                         << " vs scan " << want);
+    }
+    ++checked;
+  }
+  CHECK(checked == 4000);
+}
+
+TEST_CASE("FreeSpace: counts saturate at 65535 and the look-up follows them", "[mapping]") {
+  FreeSpaceGrid g({0, 0}, {0.1, 0.1}, 0.01);
+  passCell(g, 3, 4, 65540);
+  CHECK(g.countAt(3, 4) == 65535);
+  CHECK(g.maxInSquare({0.035, 0.045, 0.2}, 0.05, 0.0) == 65535);
+  CHECK(g.maxInSquare({0.085, 0.045, 0.2}, 0.05, 0.0) == 0);  // 5 cells away: outside
+  CHECK(g.countAt(-1, 0) == 0);
+  CHECK(g.countAt(0, 10) == 0);
 }

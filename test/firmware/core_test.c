@@ -104,6 +104,45 @@ static void test_crc16_check_value(void) {
   CHECK_EQ(bridge_crc16(digits, 0u), 0xFFFFu);
 }
 
+/* A small xorshift for test data (16-bit int safe). */
+static uint32_t test_rand_state = 0x2545F491ul;
+static uint8_t test_rand_byte(void) {
+  test_rand_state ^= test_rand_state << 13;
+  test_rand_state ^= test_rand_state >> 17;
+  test_rand_state ^= test_rand_state << 5;
+  return (uint8_t)(test_rand_state >> 24);
+}
+
+static void test_crc16_table_matches_bitwise(void) {
+  /* Every byte value at every position of a frame's 14 bytes (every entry of every table the
+   * build has), then random buffers of 0..40 bytes from random offsets (every block split). */
+  static uint8_t buf[48];
+  uint16_t pos;
+  uint16_t v;
+  uint16_t k;
+  uint16_t n;
+  uint16_t off;
+  uint16_t mismatches = 0u;
+  for (k = 0u; k < 14u; ++k) buf[k] = test_rand_byte();
+  for (pos = 0u; pos < 14u; ++pos) {
+    const uint8_t keep = buf[pos];
+    for (v = 0u; v < 256u; ++v) {
+      buf[pos] = (uint8_t)v;
+      if (bridge_crc16(buf, 14u) != bridge_crc16_bitwise(buf, 14u)) ++mismatches;
+    }
+    buf[pos] = keep;
+  }
+  for (k = 0u; k < 1000u; ++k) {
+    n = (uint16_t)(test_rand_byte() % 41u);
+    off = (uint16_t)(test_rand_byte() % 8u);
+    for (v = 0u; v < n; ++v) buf[off + v] = test_rand_byte();
+    if (bridge_crc16(&buf[off], n) != bridge_crc16_bitwise(&buf[off], n)) ++mismatches;
+  }
+  CHECK_EQ(mismatches, 0u);
+  CHECK_EQ(bridge_crc16_bitwise((const uint8_t *)"123456789", 9u), 0x29B1u);
+  CHECK_EQ(bridge_crc16(NULL, 5u), 0xFFFFu);
+}
+
 static void test_mlx_checksum_vectors(void) {
   /* The 8-bit sum of bytes 1..6; switching the checksum means changing these with it. */
   static const uint8_t ones[MLX_FRAME_LEN] = {0xFF, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x15};
@@ -773,6 +812,7 @@ static void test_board_poll_cycles_avr(void) {
 int main(void) {
   fw_test_begin();
   FW_RUN(test_crc16_check_value);
+  FW_RUN(test_crc16_table_matches_bitwise);
   FW_RUN(test_mlx_checksum_vectors);
   FW_RUN(test_mlx_round_trip_edge_values);
   FW_RUN(test_mlx_decode_rejects_bad_frames);

@@ -4,6 +4,7 @@
 #include <stddef.h>
 
 #include "whisker/error.h"
+#include "bridge_crc16_tables.h"
 
 #define BRIDGE_OFF_SYNC0 0u
 #define BRIDGE_OFF_SYNC1 1u
@@ -38,9 +39,9 @@ static uint32_t get32(const uint8_t *p) {
          ((uint32_t)p[3] << 24);
 }
 
-/* Bitwise, MSB first, no reflection, no final XOR. A 256-entry table would cost 512 B of flash
- * for a routine that runs in the main loop over 14 bytes; the bitwise loop is enough. */
-uint16_t bridge_crc16(const uint8_t *data, uint16_t n) {
+/* The definition: bitwise, MSB first, no reflection, no final XOR. The tables, the tests and the
+ * bench are checked against it. */
+uint16_t bridge_crc16_bitwise(const uint8_t *data, uint16_t n) {
   uint16_t crc = 0xFFFFu;
   uint16_t i;
   uint8_t bit;
@@ -54,6 +55,39 @@ uint16_t bridge_crc16(const uint8_t *data, uint16_t n) {
         crc = (uint16_t)(crc << 1);
       }
     }
+  }
+  return crc;
+}
+
+/* By table (bridge_crc16_tables.h, 512 B of flash): one look-up per byte instead of eight
+ * shift-and-XOR steps. The host builds it with BRIDGE_CRC_SLICE8 (4 KB of tables): a frame's 14
+ * bytes are then two steps of independent look-ups, 8 bytes and 6, instead of 14 dependent ones
+ * (docs/BENCHMARKS.md, "Issue 15"). The CRC is linear: the register folds into the block's first
+ * two bytes and each byte's share is its table entry for the bytes that follow it. */
+#ifdef BRIDGE_CRC_SLICE8
+static uint16_t crc16_block(uint16_t crc, const uint8_t *p, uint16_t m) {
+  /* 2 <= m <= 8 */
+  uint16_t r = (uint16_t)(bridge_crc16_t[m - 1u][(uint8_t)((crc >> 8) ^ p[0])] ^
+                          bridge_crc16_t[m - 2u][(uint8_t)((crc & 0xFFu) ^ p[1])]);
+  uint16_t k;
+  for (k = 2u; k < m; ++k) r = (uint16_t)(r ^ bridge_crc16_t[m - 1u - k][p[k]]);
+  return r;
+}
+#endif
+
+uint16_t bridge_crc16(const uint8_t *data, uint16_t n) {
+  uint16_t crc = 0xFFFFu;
+  uint16_t i = 0u;
+  if (data == NULL) return crc;
+#ifdef BRIDGE_CRC_SLICE8
+  for (; (uint16_t)(n - i) >= 8u; i = (uint16_t)(i + 8u)) crc = crc16_block(crc, &data[i], 8u);
+  if ((uint16_t)(n - i) >= 2u) {
+    crc = crc16_block(crc, &data[i], (uint16_t)(n - i));
+    i = n;
+  }
+#endif
+  for (; i < n; ++i) {
+    crc = (uint16_t)((uint16_t)(crc << 8) ^ bridge_crc16_t[0][(uint8_t)((crc >> 8) ^ data[i])]);
   }
   return crc;
 }

@@ -1,15 +1,48 @@
 #include "crunch/blackboard/free_space.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
 namespace crunch {
 
+namespace {
+
+// The widening of the analytic cell ranges (metres). The scan's own rounding error on a cell
+// centre's local coordinates is a few ulp of the arena's coordinates (1e-14 m for a 20 m floor),
+// so a cell 1 nm outside the exact outline is outside for the scan's arithmetic too, and one
+// 1 nm inside is inside. Holds for arenas up to about a kilometre.
+constexpr double kSafe = 1e-9;
+
+// The whole cells c with c0 <= c and a <= origin + (c + 0.5) cell <= b, clamped to [c0, c1];
+// empty (first > last) when none. Clamps before converting, so far-off bounds stay in range.
+void cellRange(double a, double b, double origin, double cell, int c0, int c1, int& first,
+               int& last) {
+  const double fa = std::ceil((a - origin) / cell - 0.5);
+  const double fb = std::floor((b - origin) / cell - 0.5);
+  first = fa > c0 ? (fa > c1 ? c1 + 1 : static_cast<int>(fa)) : c0;
+  last = fb < c1 ? (fb < c0 ? c0 - 1 : static_cast<int>(fb)) : c1;
+}
+
+// Narrows [lo, hi] to the u with |a u + b| <= bound.
+void clampLinear(double a, double b, double bound, double& lo, double& hi) {
+  if (a == 0.0) {
+    if (std::abs(b) > bound) hi = lo - 1.0;  // empty
+    return;
+  }
+  const double u0 = (-bound - b) / a, u1 = (bound - b) / a;
+  lo = std::max(lo, std::min(u0, u1));
+  hi = std::min(hi, std::max(u0, u1));
+}
+
+}  // namespace
+
 FreeSpaceGrid::FreeSpaceGrid(const Vec2& lo, const Vec2& hi, double cell) : lo_(lo), cell_(cell) {
   nx_ = std::max(1, static_cast<int>(std::ceil((hi.x() - lo.x()) / cell)));
   ny_ = std::max(1, static_cast<int>(std::ceil((hi.y() - lo.y()) / cell)));
   counts_.assign(static_cast<size_t>(nx_) * static_cast<size_t>(ny_), 0);
+  for (std::vector<uint16_t>& w : windows_) w.assign(counts_.size(), 0);
 }
 
 bool FreeSpaceGrid::index(const Vec2& p, int& ix, int& iy) const {
@@ -32,36 +65,120 @@ void FreeSpaceGrid::addRay(const FreeRay& ray) {
     if (!index(p, ix, iy) || (ix == last_x && iy == last_y)) continue;
     last_x = ix;
     last_y = iy;
-    uint16_t& c = counts_[static_cast<size_t>(iy) * static_cast<size_t>(nx_) + static_cast<size_t>(ix)];
-    if (c < std::numeric_limits<uint16_t>::max()) ++c;
+    uint16_t& c = counts_[at(ix, iy)];
+    if (c < std::numeric_limits<uint16_t>::max()) {
+      ++c;
+      raise(ix, iy, c);
+    }
+  }
+}
+
+void FreeSpaceGrid::raise(int ix, int iy, uint16_t v) {
+  // Every window of side 2s containing the cell contains the window of side s that holds the
+  // cell in its quarter, and every stored maximum is exact: once no window of side s needed
+  // raising, none of the larger ones does either.
+  for (int j = 1; j <= kLevels; ++j) {
+    const int s = 1 << j;
+    std::vector<uint16_t>& w = windows_[static_cast<size_t>(j - 1)];
+    bool raised = false;
+    for (int y = std::max(0, iy - s + 1); y <= iy; ++y) {
+      uint16_t* row = w.data() + at(0, y);
+      for (int x = std::max(0, ix - s + 1); x <= ix; ++x) {
+        if (row[x] < v) {
+          row[x] = v;
+          raised = true;
+        }
+      }
+    }
+    if (!raised) return;
   }
 }
 
 int FreeSpaceGrid::count(const Vec2& p) const {
   int ix, iy;
   if (!index(p, ix, iy)) return 0;
-  return counts_[static_cast<size_t>(iy) * static_cast<size_t>(nx_) + static_cast<size_t>(ix)];
+  return counts_[at(ix, iy)];
+}
+
+int FreeSpaceGrid::countAt(int ix, int iy) const {
+  if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) return 0;
+  return counts_[at(ix, iy)];
+}
+
+int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
+  // Windows of the largest side s that fits the box's shorter side, the last one in each
+  // direction pulled back to end on the box's edge: 2 x 2 look-ups when the box is at most 2s
+  // each way (any near-square box up to 8 cells), more for longer or larger boxes.
+  const int shorter = std::min(x1 - x0, y1 - y0) + 1;
+  const int j = std::min(kLevels, static_cast<int>(std::bit_width(static_cast<unsigned>(shorter))) - 1);
+  const int s = 1 << j;
+  const uint16_t* w = j == 0 ? counts_.data() : windows_[static_cast<size_t>(j - 1)].data();
+  int best = 0;
+  for (int y = y0;; y += s) {
+    const int wy = std::min(y, y1 - s + 1);
+    for (int x = x0;; x += s) {
+      const int wx = std::min(x, x1 - s + 1);
+      best = std::max<int>(best, w[at(wx, wy)]);
+      if (wx + s > x1) break;
+    }
+    if (wy + s > y1) break;
+  }
+  return best;
 }
 
 int FreeSpaceGrid::maxInSquare(const Pose2& pose, double side, double margin) const {
   const double h = 0.5 * side - margin;
   if (h <= 0) return count(pose.position());
-  // Visit the cells of the core's bounding box; keep those whose centre is inside the core.
+  // The cells of the core's bounding box, as the reference scan (free_space_scan.h) takes them.
   const double reach = h * std::sqrt(2.0);
-  int x0, y0, x1, y1;
   const Vec2 lo = pose.position() - Vec2{reach, reach}, hi = pose.position() + Vec2{reach, reach};
-  x0 = std::max(0, static_cast<int>(std::floor((lo.x() - lo_.x()) / cell_)));
-  y0 = std::max(0, static_cast<int>(std::floor((lo.y() - lo_.y()) / cell_)));
-  x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - lo_.x()) / cell_)));
-  y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - lo_.y()) / cell_)));
+  const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - lo_.x()) / cell_)));
+  const int y0 = std::max(0, static_cast<int>(std::floor((lo.y() - lo_.y()) / cell_)));
+  const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - lo_.x()) / cell_)));
+  const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - lo_.y()) / cell_)));
+  if (x0 > x1 || y0 > y1) return 0;
+  const int upper = boxMax(x0, y0, x1, y1);
+  if (upper == 0) return 0;
+  // The core, turned by any angle, holds the axis-aligned square of half-side h / sqrt(2) about
+  // its centre (h / (|cos| + |sin|) at its own angle: not worth the trigonometry here); shrunk
+  // by kSafe, the scan counts each of its cells in.
+  const double g = h * std::sqrt(0.5) - kSafe;
+  if (g > 0) {
+    int ix0, ix1, iy0, iy1;
+    cellRange(pose.x - g, pose.x + g, lo_.x(), cell_, x0, x1, ix0, ix1);
+    cellRange(pose.y - g, pose.y + g, lo_.y(), cell_, y0, y1, iy0, iy1);
+    if (ix0 <= ix1 && iy0 <= iy1 && boxMax(ix0, iy0, ix1, iy1) == upper) return upper;
+  }
+  return scanCore(pose, h, x0, y0, x1, y1, upper);
+}
+
+int FreeSpaceGrid::scanCore(const Pose2& pose, double h, int x0, int y0, int x1, int y1,
+                            int upper) const {
+  // Pose2::toLocal's arithmetic with cos and sin taken once: the same bits per cell.
+  const double c = std::cos(pose.theta), s = std::sin(pose.theta);
+  // A NaN angle makes every local coordinate NaN, which the scan's test lets through.
+  if (std::isnan(c) || std::isnan(s)) return upper;
+  const double wide = h + kSafe;
   int best = 0;
   for (int iy = y0; iy <= y1; ++iy) {
-    for (int ix = x0; ix <= x1; ++ix) {
-      const Vec2 c = lo_ + Vec2{(ix + 0.5) * cell_, (iy + 0.5) * cell_};
-      const Vec2 q = pose.toLocal(c);
-      if (std::abs(q.x()) > h || std::abs(q.y()) > h) continue;
-      best = std::max<int>(best, counts_[static_cast<size_t>(iy) * static_cast<size_t>(nx_) +
-                                         static_cast<size_t>(ix)]);
+    const double dy = (lo_.y() + (iy + 0.5) * cell_) - pose.y;
+    // The x offsets whose local coordinates are within h + kSafe: q.x = c dx + s dy and
+    // q.y = -s dx + c dy.
+    double dlo = -std::numeric_limits<double>::infinity();
+    double dhi = std::numeric_limits<double>::infinity();
+    clampLinear(c, s * dy, wide, dlo, dhi);
+    clampLinear(-s, c * dy, wide, dlo, dhi);
+    if (!(dlo <= dhi)) continue;
+    int ix0, ix1;
+    cellRange(pose.x + dlo, pose.x + dhi, lo_.x(), cell_, x0, x1, ix0, ix1);
+    const uint16_t* row = counts_.data() + at(0, iy);
+    for (int ix = ix0; ix <= ix1; ++ix) {
+      if (row[ix] <= best) continue;
+      const double dx = (lo_.x() + (ix + 0.5) * cell_) - pose.x;
+      const double qx = c * dx + s * dy, qy = -s * dx + c * dy;
+      if (std::abs(qx) > h || std::abs(qy) > h) continue;
+      best = row[ix];
+      if (best == upper) return best;
     }
   }
   return best;

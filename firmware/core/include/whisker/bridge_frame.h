@@ -43,8 +43,12 @@ typedef struct {
   uint16_t status;
 } bridge_frame_t;
 
-/* CRC-16/CCITT-FALSE of n bytes (check value: "123456789" -> 0x29B1). */
+/* CRC-16/CCITT-FALSE of n bytes (check value: "123456789" -> 0x29B1), by table: 512 B of flash;
+ * built with BRIDGE_CRC_SLICE8 defined (the host build does), slicing-by-8 with 4 KB of tables. */
 uint16_t bridge_crc16(const uint8_t *data, uint16_t n);
+
+/* The same CRC bit by bit: the definition, for tests and benchmarks to compare with. */
+uint16_t bridge_crc16_bitwise(const uint8_t *data, uint16_t n);
 
 /* Writes the 18 bytes of `f`. FW_EINVAL for null pointers or board >= BRIDGE_MAX_BOARDS. */
 int bridge_encode(const bridge_frame_t *f, uint8_t out[BRIDGE_FRAME_LEN]);
