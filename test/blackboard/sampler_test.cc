@@ -177,6 +177,7 @@ TEST_CASE("Sampler: incremental and reference energies run the same chain", "[bl
     for (const auto& s : TableShapelets({1.6, 1.5, 1.2}, p, {0, 2})) bb.pushShapelet(s);
     Rng rng(15);
     SamplerOptions opt;
+    opt.sweeps_per_temperature = 8;  // enough moves of every kind to part the two if they could
     opt.incremental_energy = incremental;
     Sampler sampler(bb, opt, rng);
     sampler.anneal();
