@@ -77,7 +77,7 @@ TEST_CASE("sweep-chart draws the Pareto and noise charts and a summary", "[sweep
   CHECK(r.out.find("mean recall below 0.5 from sigma_r = 25 mm") != std::string::npos);
 }
 
-TEST_CASE("sweep-chart without --out writes beside sweep.json; one setting draws only noise",
+TEST_CASE("sweep-chart without --out writes beside sweep.json, one setting draws only noise",
           "[sweep_chart]") {
   TempDir in;
   Json rows = Json::array();

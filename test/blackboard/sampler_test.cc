@@ -199,7 +199,7 @@ TEST_CASE("Sampler: incremental and reference energies run the same chain", "[bl
   }
 }
 
-TEST_CASE("Sampler: reversible-jump options are validated; acceptance names round-trip",
+TEST_CASE("Sampler: reversible-jump options are validated, acceptance names round-trip",
           "[blackboard]") {
   SamplerOptions o;
   o.rj_moves = {0, 0, 0, 0, 0, 0};
