@@ -582,22 +582,24 @@ double Blackboard::localEnergy(const Touched& t, std::span<const int32_t> more_s
 
 // ---------------------------------------------------------------- incremental energies
 
-double Blackboard::cachedTableOwn(int32_t id) {
-  TableHyp& tab = tables_[id];
-  if (tab.own_gen != gen_) {
-    tab.own = tableOwnTerm(tab);
-    tab.own_gen = gen_;
+namespace {
+// A record's own terms from its cache, computed by fresh(record) and stored where stale.
+template <typename Record, typename Fresh>
+double cachedOwn(Record& r, uint64_t gen, Fresh&& fresh) {
+  if (r.own_gen != gen) {
+    r.own = fresh(r);
+    r.own_gen = gen;
   }
-  return tab.own;
+  return r.own;
+}
+}  // namespace
+
+double Blackboard::cachedTableOwn(int32_t id) {
+  return cachedOwn(tables_[id], gen_, [&](const TableHyp& t) { return tableOwnTerm(t); });
 }
 
 double Blackboard::cachedLegOwn(int32_t id) {
-  LegHyp& l = legs_[id];
-  if (l.own_gen != gen_) {
-    l.own = legOwnTerm(l);
-    l.own_gen = gen_;
-  }
-  return l.own;
+  return cachedOwn(legs_[id], gen_, [&](const LegHyp& l) { return legOwnTerm(l); });
 }
 
 double Blackboard::cachedShapeletTerm(int slot) {
