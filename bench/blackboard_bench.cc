@@ -2,7 +2,10 @@
 // Results and how to run them: docs/BENCHMARKS.md.
 //
 //   BM_SweepThroughput   Metropolis-Hastings proposals per second: working memory 7 fed from a
-//                        few synthetic tables, Sampler::sweep at a fixed beta.
+//                        few synthetic tables, Sampler::sweep at a fixed beta. Second arg:
+//                        1 = incremental energies (the default), 0 = the reference energy path
+//                        (both sides of every move evaluated afresh; issue 15's baseline,
+//                        measured in the same run).
 //   BM_PoseAnneal        per-pose inference latency: push one pose's shapelets (2-4), then the
 //                        full annealing schedule (Sampler::anneal, 16 temperatures).
 //   BM_SweepScaling      cost per proposal against the number of live hypotheses N on a floor
@@ -71,7 +74,9 @@ void BM_SweepThroughput(benchmark::State& state) {
   const std::vector<Shapelet> feed = fewTablesShapelets(p);
   Blackboard bb(p, 7, 4096);
   Rng rng(1);
-  Sampler sampler(bb, SamplerOptions{}, rng);
+  SamplerOptions opt;
+  opt.incremental_energy = state.range(1) != 0;
+  Sampler sampler(bb, opt, rng);
   size_t next = 0;
   auto push = [&](int n) {
     for (int i = 0; i < n; ++i) bb.pushShapelet(feed[next++ % feed.size()]);
@@ -98,7 +103,9 @@ void BM_SweepThroughput(benchmark::State& state) {
   state.counters["live_hyp"] =
       benchmark::Counter(static_cast<double>(live_sum), benchmark::Counter::kAvgIterations);
 }
-BENCHMARK(BM_SweepThroughput)->ArgName("log_beta_x10")->Arg(0)->Arg(35)->Arg(75);
+BENCHMARK(BM_SweepThroughput)
+    ->ArgNames({"log_beta_x10", "incremental"})
+    ->ArgsProduct({{0, 35, 75}, {1, 0}});
 
 // ---------------------------------------------------------------- 2. per-pose latency
 

@@ -142,6 +142,7 @@ TEST_CASE("Sampler: every wall move's local energy change equals the brute-force
   CHECK(most_walls >= 2);  // walls were born and moved, so the audit covered their moves
   CHECK(sampler.stats().proposals > 1000);
   CHECK(sampler.stats().audit_max_error < 1e-9);
+  CHECK(sampler.stats().audit_cache_max_error < 1e-9);  // every cached term is its fresh value
 }
 
 TEST_CASE("Sampler: contacts along a wall become a wall, not a table", "[blackboard]") {

@@ -37,12 +37,23 @@ Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t res
       log_eps_b_(std::log(params.eps_b)),
       log_eps_c_(std::log(params.eps_c)),
       table_odds_(logPresenceOdds(std::log(params.c_T), params)),
+      logs_(params),
+      orphan_leg_odds_(logPresenceOdds(logs_.c_L, logs_)),
+      paper_table_radius_(OrientedRect{{}, params.table_width, params.table_depth}.circumradius()),
+      max_table_radius_(params.maxTableCircumradius()),
+      max_leg_side_(params.maxLegSide()),
+      shapelet_link_r_(params.shapeletLinkRadius()),
+      wall_link_r_(params.wallLinkRadius()),
       walls_(params.walled() ? 256 : 0),
       wall_hash_(kWallCell, params.walled() ? 11 : 4,
                  params.walled() ? 8 : 0),
       slot_stamp_(static_cast<size_t>(working_memory), 0),
-      wall_odds_(logPresenceOdds(std::log(params.c_W), params)) {
+      wall_odds_(logPresenceOdds(std::log(params.c_W), params)),
+      slot_term_(static_cast<size_t>(working_memory), 0.0),
+      slot_gen_(static_cast<size_t>(working_memory), 0) {
   assert(working_memory > 0);
+  // A move's shapelets: its Touched set and, for a wall's move, up to every slot besides.
+  kept_slots_.reserve(static_cast<size_t>(working_memory) + 64);
 }
 
 // ---------------------------------------------------------------- working memory
@@ -57,12 +68,14 @@ int Blackboard::pushShapelet(const Shapelet& s) {
   }
   wm_[i] = s;
   wm_used_[i] = true;
+  slot_gen_[i] = 0;  // its cached term, if any, was the evicted shapelet's
   shapelet_hash_.insert(slot, {s.x, s.y});
   wm_next_ = (wm_next_ + 1) % static_cast<int>(wm_.size());
   return slot;
 }
 
 void Blackboard::clearShapelets() {
+  ++gen_;
   shapelet_hash_.clear();
   std::fill(wm_used_.begin(), wm_used_.end(), false);
   wm_next_ = 0;
@@ -70,7 +83,7 @@ void Blackboard::clearShapelets() {
 }
 
 void Blackboard::shapeletsNear(const Vec2& p, IdSet<64>& out) const {
-  const double r = p_.shapeletLinkRadius();
+  const double r = shapelet_link_r_;
   shapelet_hash_.query(p, r, [&](int32_t slot) {
     const Shapelet& s = wm_[static_cast<size_t>(slot)];
     if ((Vec2{s.x, s.y} - p).squaredNorm() <= r * r) out.add(slot);
@@ -79,17 +92,35 @@ void Blackboard::shapeletsNear(const Vec2& p, IdSet<64>& out) const {
 
 // ---------------------------------------------------------------- hypotheses
 
+void Blackboard::setTablePose(TableHyp& t, const Pose2& pose) {
+  t.pose = pose;
+  t.trig = {std::cos(pose.theta), std::sin(pose.theta), tableRect(t).circumradius()};
+}
+
+void Blackboard::setLegPose(LegHyp& l, const Pose2& pose) {
+  l.pose = pose;
+  l.trig = {std::cos(pose.theta), std::sin(pose.theta), legRect(l).circumradius()};
+}
+
+void Blackboard::setLegSide(int32_t id, double side) {
+  mutated();
+  LegHyp& l = legs_[id];
+  l.side = side;
+  l.trig.radius = legRect(l).circumradius();
+}
+
 int32_t Blackboard::addTable(const Pose2& pose) {
   return addTable(pose, p_.table_width, p_.table_depth, p_.leg_side);
 }
 
 int32_t Blackboard::addTable(const Pose2& pose, double width, double depth, double leg) {
+  mutated();
   const int32_t id = tables_.acquire();
   TableHyp& t = tables_[id];
-  t.pose = pose;
   t.width = width;
   t.depth = depth;
   t.leg = leg;
+  setTablePose(t, pose);
   t.alive = true;
   table_hash_.insert(id, pose.position());
   ++live_tables_;
@@ -101,10 +132,11 @@ int32_t Blackboard::addLeg(const Pose2& pose, int32_t parent) {
 }
 
 int32_t Blackboard::addLeg(const Pose2& pose, double side, int32_t parent) {
+  mutated();
   const int32_t id = legs_.acquire();
   LegHyp& l = legs_[id];
-  l.pose = pose;
   l.side = side;
+  setLegPose(l, pose);
   l.alive = true;
   leg_hash_.insert(id, pose.position());
   ++live_legs_;
@@ -114,7 +146,7 @@ int32_t Blackboard::addLeg(const Pose2& pose, double side, int32_t parent) {
 
 int Blackboard::nearestCorner(const TableHyp& table, const LegHyp& leg) const {
   int corner = 0;
-  deltaTLSized(table, leg, p_, &corner);
+  deltaTLHeld(table, leg, p_, &corner);
   return corner;
 }
 
@@ -144,6 +176,7 @@ void Blackboard::unlinkChild(int32_t table, int32_t leg) {
 }
 
 void Blackboard::killTable(int32_t id) {
+  mutated();
   TableHyp& t = tables_[id];
   assert(t.alive);
   t.alive = false;
@@ -158,6 +191,7 @@ void Blackboard::killTable(int32_t id) {
 }
 
 void Blackboard::reviveTable(int32_t id) {
+  mutated();
   TableHyp& t = tables_[id];
   assert(!t.alive);
   t.alive = true;
@@ -170,6 +204,7 @@ void Blackboard::reviveTable(int32_t id) {
 }
 
 void Blackboard::killLeg(int32_t id) {
+  mutated();
   LegHyp& l = legs_[id];
   assert(l.alive);
   const int32_t parent = l.parent;
@@ -181,6 +216,7 @@ void Blackboard::killLeg(int32_t id) {
 }
 
 void Blackboard::reviveLeg(int32_t id) {
+  mutated();
   LegHyp& l = legs_[id];
   assert(!l.alive);
   l.alive = true;
@@ -192,6 +228,7 @@ void Blackboard::reviveLeg(int32_t id) {
 }
 
 void Blackboard::setParent(int32_t leg, int32_t parent) {
+  mutated();
   LegHyp& l = legs_[leg];
   if (l.parent == parent) return;
   if (l.parent != kNone) unlinkChild(l.parent, leg);
@@ -205,12 +242,13 @@ void Blackboard::moveTable(int32_t id, const Pose2& pose) {
 
 void Blackboard::reshapeTable(int32_t id, const Pose2& pose, double width, double depth,
                               double leg) {
+  mutated();
   TableHyp& t = tables_[id];
   table_hash_.remove(id, t.pose.position());
-  t.pose = pose;
   t.width = width;
   t.depth = depth;
   t.leg = leg;
+  setTablePose(t, pose);
   table_hash_.insert(id, pose.position());
   // Children keep their parent; their nearest corners may change.
   t.corner_count = {};
@@ -222,9 +260,10 @@ void Blackboard::reshapeTable(int32_t id, const Pose2& pose, double width, doubl
 }
 
 void Blackboard::moveLeg(int32_t id, const Pose2& pose) {
+  mutated();
   LegHyp& l = legs_[id];
   leg_hash_.remove(id, l.pose.position());
-  l.pose = pose;
+  setLegPose(l, pose);
   leg_hash_.insert(id, pose.position());
   if (l.parent != kNone) {
     TableHyp& t = tables_[l.parent];
@@ -244,6 +283,7 @@ void Blackboard::wallHashPoints(const Vec2& a, const Vec2& b, F&& f) const {
 }
 
 int32_t Blackboard::addWall(const Vec2& a, const Vec2& b) {
+  mutated();
   const int32_t id = walls_.acquire();
   WallHyp& w = walls_[id];
   w.a = a;
@@ -255,6 +295,7 @@ int32_t Blackboard::addWall(const Vec2& a, const Vec2& b) {
 }
 
 void Blackboard::killWall(int32_t id) {
+  mutated();
   WallHyp& w = walls_[id];
   assert(w.alive);
   w.alive = false;
@@ -263,6 +304,7 @@ void Blackboard::killWall(int32_t id) {
 }
 
 void Blackboard::reviveWall(int32_t id) {
+  mutated();
   WallHyp& w = walls_[id];
   assert(!w.alive);
   w.alive = true;
@@ -271,6 +313,7 @@ void Blackboard::reviveWall(int32_t id) {
 }
 
 void Blackboard::moveWall(int32_t id, const Vec2& a, const Vec2& b) {
+  mutated();
   WallHyp& w = walls_[id];
   assert(w.alive);
   wallHashPoints(w.a, w.b, [&](const Vec2& q) { wall_hash_.remove(id, q); });
@@ -288,7 +331,7 @@ void Blackboard::beginCollect() {
 
 void Blackboard::collectShapeletsNearSegment(const Vec2& a, const Vec2& b,
                                              std::vector<int32_t>& out) {
-  const double r = p_.wallLinkRadius();
+  const double r = wall_link_r_;
   const double len = (b - a).norm();
   const int n = std::max(1, static_cast<int>(std::ceil(len / kShapeletCell)));
   const double reach = 0.5 * len / n + r;
@@ -308,7 +351,7 @@ void Blackboard::collectShapeletsNearSegment(const Vec2& a, const Vec2& b,
 
 void Blackboard::collectShapeletsNearLeg(int32_t leg, std::vector<int32_t>& out) {
   const Vec2 c = legs_[leg].pose.position();
-  const double r = p_.shapeletLinkRadius();
+  const double r = shapelet_link_r_;
   shapelet_hash_.query(c, r, [&](int32_t slot) {
     uint32_t& mark = slot_stamp_[static_cast<size_t>(slot)];
     if (mark == stamp_) return;
@@ -333,7 +376,7 @@ double Blackboard::wallFreeTerm(const Vec2& a, const Vec2& b) const {
   const double piece = len / pieces;
   const int steps = std::max(1, static_cast<int>(std::ceil(piece / free_->cell())));
   double e = 0.0;
-  const double log_miss = std::log(p_.p_miss);
+  const double log_miss = logs_.p_miss;
   for (int i = 0; i < pieces; ++i) {
     int best = 0;
     for (int k = 0; k < steps; ++k) {
@@ -367,13 +410,12 @@ double Blackboard::wallTerms(int32_t id, const Touched& t) const {
   // Tables and legs intruding into its solid, counted here for every one; tableTerms() and
   // legTerms() skip the walls a move touches.
   const double band = p_.wall_solid_depth;
-  const double table_reach =
-      p_.sized() ? p_.maxTableCircumradius() : tableRect(Pose2{}).circumradius();
+  const double table_reach = p_.sized() ? max_table_radius_ : paper_table_radius_;
   nearWall(table_hash_, w, table_reach + band,
            [&](int32_t o) { return tables_[o].pose.position(); }, [&](int32_t o) {
              if (tables_[o].alive && inWallSolid(tableRect(tables_[o]), w)) e += log_eps_b_;
            });
-  nearWall(leg_hash_, w, p_.maxLegSide() + band,
+  nearWall(leg_hash_, w, max_leg_side_ + band,
            [&](int32_t o) { return legs_[o].pose.position(); }, [&](int32_t o) {
              if (legs_[o].alive && inWallSolid(legRect(legs_[o]), w)) e += log_eps_b_;
            });
@@ -381,6 +423,7 @@ double Blackboard::wallTerms(int32_t id, const Touched& t) const {
 }
 
 void Blackboard::clear() {
+  ++gen_;
   walls_.reset();
   wall_hash_.clear();
   live_walls_ = 0;
@@ -398,14 +441,14 @@ void Blackboard::clear() {
 double Blackboard::freeTerm(const Pose2& pose, double side) const {
   if (!free_) return 0.0;
   const int passes = free_->maxInSquare(pose, side, p_.free_margin);
-  return std::min(passes, p_.free_pass_cap) * std::log(p_.p_miss);
+  return std::min(passes, p_.free_pass_cap) * logs_.p_miss;
 }
 
 double Blackboard::tableFreeTerm(const TableHyp& table) const {
   if (!free_) return 0.0;
   double e = 0.0;
   for (int i = 0; i < 4; ++i) {
-    const Vec2 c = table.corner(i);
+    const Vec2 c = table.pose.toWorld(table.cornerOffset(i), table.trig.c, table.trig.s);
     e += freeTerm({c.x(), c.y(), table.pose.theta}, table.leg);
   }
   return e;
@@ -423,18 +466,28 @@ double Blackboard::legSideTerm(const LegHyp& l) const {
 double Blackboard::tableTerms(int32_t id, const Touched& t) const {
   const TableHyp& tab = tables_[id];
   if (!tab.alive) return 0.0;
+  return tablePairTerms(id, t, tableOwnTerm(tab));
+}
+
+double Blackboard::tableOwnTerm(const TableHyp& tab) const {
   double e = table_odds_ + tab.missingLegs() * log_eps_a_ + tableFreeTerm(tab);
   if (p_.sized()) e += tableSizeTerm(tab);
+  return e;
+}
+
+double Blackboard::tablePairTerms(int32_t id, const Touched& t, double own) const {
+  const TableHyp& tab = tables_[id];
+  double e = own;
   const OrientedRect rect = tableRect(tab);
-  const double reach = p_.sized() ? rect.circumradius() + p_.maxTableCircumradius()
-                                  : 2.0 * rect.circumradius();
+  const double radius = tab.trig.radius;
+  const double reach = p_.sized() ? radius + max_table_radius_ : 2.0 * radius;
   table_hash_.query(tab.pose.position(), reach, [&](int32_t o) {
     if (o == id || !tables_[o].alive) return;
     if (o < id && t.tables.contains(o)) return;  // pair counted from o's side
-    if (overlaps(rect, tableRect(tables_[o]))) e += log_eps_b_;
+    if (overlaps(rect, tab.trig, tableRect(tables_[o]), tables_[o].trig)) e += log_eps_b_;
   });
   if (p_.walled()) {
-    wallsNear(tab.pose.position(), rect.circumradius() + p_.wall_solid_depth, [&](int32_t w) {
+    wallsNear(tab.pose.position(), radius + p_.wall_solid_depth, [&](int32_t w) {
       if (!walls_[w].alive || t.walls.contains(w)) return;  // a touched wall counts the pair
       if (inWallSolid(rect, walls_[w])) e += log_eps_b_;
     });
@@ -445,20 +498,36 @@ double Blackboard::tableTerms(int32_t id, const Touched& t) const {
 double Blackboard::legTerms(int32_t id, const Touched& t) const {
   const LegHyp& l = legs_[id];
   if (!l.alive) return 0.0;
+  return legPairTerms(id, t, legOwnTerm(l));
+}
+
+double Blackboard::legOwnTerm(const LegHyp& l) const {
   const bool has_parent = l.parent != kNone;
-  const double dtl = has_parent ? deltaTLSized(tables_[l.parent], l, p_, nullptr) : 0.0;
-  double e = logPresenceOdds(logLegDensity(dtl, has_parent, p_), p_) + freeTerm(l.pose, l.side);
+  const double odds =
+      has_parent ? logPresenceOdds(logLegDensity(deltaTLHeld(tables_[l.parent], l, p_, nullptr),
+                                                 true, logs_),
+                                   logs_)
+                 : orphan_leg_odds_;
+  double e = odds + freeTerm(l.pose, l.side);
   if (p_.sized()) e += legSideTerm(l);
+  return e;
+}
+
+double Blackboard::legPairTerms(int32_t id, const Touched& t, double own) const {
+  const LegHyp& l = legs_[id];
+  const bool has_parent = l.parent != kNone;
+  double e = own;
   const OrientedRect rect = legRect(l);
-  const double reach = p_.sized() ? rect.circumradius() + 0.5 * std::sqrt(2.0) * p_.maxLegSide()
-                                  : 2.0 * rect.circumradius();
+  const double radius = l.trig.radius;
+  const double reach =
+      p_.sized() ? radius + 0.5 * std::sqrt(2.0) * max_leg_side_ : 2.0 * radius;
   leg_hash_.query(l.pose.position(), reach, [&](int32_t o) {
     if (o == id || !legs_[o].alive) return;
     if (o < id && t.legs.contains(o)) return;
-    if (overlaps(rect, legRect(legs_[o]))) e += log_eps_b_;
+    if (overlaps(rect, l.trig, legRect(legs_[o]), legs_[o].trig)) e += log_eps_b_;
   });
   if (p_.walled()) {
-    wallsNear(l.pose.position(), rect.circumradius() + p_.wall_solid_depth, [&](int32_t w) {
+    wallsNear(l.pose.position(), radius + p_.wall_solid_depth, [&](int32_t w) {
       if (!walls_[w].alive || t.walls.contains(w)) return;  // a touched wall counts the pair
       if (inWallSolid(rect, walls_[w])) e += log_eps_b_;
     });
@@ -478,19 +547,19 @@ double Blackboard::legTerms(int32_t id, const Touched& t) const {
 double Blackboard::shapeletTerm(int slot) const {
   if (!wm_used_[static_cast<size_t>(slot)]) return 0.0;
   const Shapelet& s = wm_[static_cast<size_t>(slot)];
-  const double r = p_.shapeletLinkRadius();
-  double acc = std::log(p_.c_S);
+  const double r = shapelet_link_r_;
+  double acc = logs_.c_S;
   leg_hash_.query({s.x, s.y}, r, [&](int32_t o) {
     const LegHyp& l = legs_[o];
     if (!l.alive || (l.pose.position() - Vec2{s.x, s.y}).squaredNorm() > r * r) return;
-    acc = logAddExp(acc, logShapeletKernel(l, s, p_));
+    acc = logAddExp(acc, logShapeletKernelHeld(l, s, p_, logs_));
   });
   if (p_.walled()) {
-    const double rw = p_.wallLinkRadius();
+    const double rw = wall_link_r_;
     wallsNear({s.x, s.y}, rw, [&](int32_t o) {
       const WallHyp& w = walls_[o];
       if (!w.alive || distanceToSegment({s.x, s.y}, w.a, w.b) > rw) return;
-      acc = logAddExp(acc, logWallKernel(w, s, p_));
+      acc = logAddExp(acc, logWallKernel(w, s, p_, logs_));
     });
   }
   return acc;
@@ -509,6 +578,133 @@ double Blackboard::localEnergy(const Touched& t, std::span<const int32_t> more_s
   double e = localEnergy(t);
   for (int32_t slot : more_shapelets) e += shapeletTerm(slot);
   return e;
+}
+
+// ---------------------------------------------------------------- incremental energies
+
+namespace {
+// A record's own terms from its cache, computed by fresh(record) and stored where stale.
+template <typename Record, typename Fresh>
+double cachedOwn(Record& r, uint64_t gen, Fresh&& fresh) {
+  if (r.own_gen != gen) {
+    r.own = fresh(r);
+    r.own_gen = gen;
+  }
+  return r.own;
+}
+}  // namespace
+
+double Blackboard::cachedTableOwn(int32_t id) {
+  return cachedOwn(tables_[id], gen_, [&](const TableHyp& t) { return tableOwnTerm(t); });
+}
+
+double Blackboard::cachedLegOwn(int32_t id) {
+  return cachedOwn(legs_[id], gen_, [&](const LegHyp& l) { return legOwnTerm(l); });
+}
+
+double Blackboard::cachedShapeletTerm(int slot) {
+  const auto i = static_cast<size_t>(slot);
+  if (slot_gen_[i] != gen_) {
+    slot_term_[i] = shapeletTerm(slot);
+    slot_gen_[i] = gen_;
+  }
+  return slot_term_[i];
+}
+
+double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more) {
+  if (!incremental_) return localEnergy(t, more);
+  if (free_ && free_->rays() != rays_seen_) {  // new negative evidence: every own term changed
+    rays_seen_ = free_->rays();
+    ++gen_;
+  }
+  // The sum localEnergy() makes, in its order, with the own and shapelet terms from the cache.
+  double e = 0.0;
+  for (int32_t id : t.tables.span())
+    if (tables_[id].alive) e += tablePairTerms(id, t, cachedTableOwn(id));
+  for (int32_t id : t.legs.span())
+    if (legs_[id].alive) e += legPairTerms(id, t, cachedLegOwn(id));
+  for (int32_t slot : t.shapelets.span())
+    if (wm_used_[static_cast<size_t>(slot)]) e += cachedShapeletTerm(slot);
+  for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  for (int32_t slot : more)
+    if (wm_used_[static_cast<size_t>(slot)]) e += cachedShapeletTerm(slot);
+  return e;
+}
+
+double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) {
+  n_kept_tables_ = n_kept_legs_ = 0;
+  kept_slots_.clear();
+  if (!incremental_) return localEnergy(t, more);
+  double e = 0.0;
+  for (int32_t id : t.tables.span()) {
+    if (!tables_[id].alive) continue;
+    const double own = tableOwnTerm(tables_[id]);
+    kept_tables_[static_cast<size_t>(n_kept_tables_++)] = {id, own};
+    e += tablePairTerms(id, t, own);
+  }
+  for (int32_t id : t.legs.span()) {
+    if (!legs_[id].alive) continue;
+    const double own = legOwnTerm(legs_[id]);
+    kept_legs_[static_cast<size_t>(n_kept_legs_++)] = {id, own};
+    e += legPairTerms(id, t, own);
+  }
+  const auto keep = [&](int32_t slot) {
+    if (!wm_used_[static_cast<size_t>(slot)]) return 0.0;
+    const double term = shapeletTerm(slot);
+    assert(kept_slots_.size() < kept_slots_.capacity());
+    kept_slots_.push_back({slot, term});
+    return term;
+  };
+  for (int32_t slot : t.shapelets.span()) e += keep(slot);
+  for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  for (int32_t slot : more) e += keep(slot);
+  return e;
+}
+
+void Blackboard::acceptMove() {
+  for (int i = 0; i < n_kept_tables_; ++i) {
+    TableHyp& tab = tables_[kept_tables_[static_cast<size_t>(i)].id];
+    tab.own = kept_tables_[static_cast<size_t>(i)].value;
+    tab.own_gen = gen_;
+  }
+  for (int i = 0; i < n_kept_legs_; ++i) {
+    LegHyp& l = legs_[kept_legs_[static_cast<size_t>(i)].id];
+    l.own = kept_legs_[static_cast<size_t>(i)].value;
+    l.own_gen = gen_;
+  }
+  for (const Kept& k : kept_slots_) {
+    slot_term_[static_cast<size_t>(k.id)] = k.value;
+    slot_gen_[static_cast<size_t>(k.id)] = gen_;
+  }
+  n_kept_tables_ = n_kept_legs_ = 0;
+  kept_slots_.clear();
+}
+
+void Blackboard::setIncremental(bool on) {
+  incremental_ = on;
+  ++gen_;
+}
+
+namespace {
+double termError(double cached, double fresh) {
+  return cached == fresh ? 0.0 : std::abs(cached - fresh);  // equal infinities: no error
+}
+}  // namespace
+
+double Blackboard::cacheError() const {
+  double err = 0.0;
+  for (int32_t id = 0; id < tables_.extent(); ++id) {
+    const TableHyp& tab = tables_[id];
+    if (tab.alive && tab.own_gen == gen_) err = std::max(err, termError(tab.own, tableOwnTerm(tab)));
+  }
+  for (int32_t id = 0; id < legs_.extent(); ++id) {
+    const LegHyp& l = legs_[id];
+    if (l.alive && l.own_gen == gen_) err = std::max(err, termError(l.own, legOwnTerm(l)));
+  }
+  for (size_t i = 0; i < wm_.size(); ++i)
+    if (wm_used_[i] && slot_gen_[i] == gen_)
+      err = std::max(err, termError(slot_term_[i], shapeletTerm(static_cast<int>(i))));
+  return err;
 }
 
 double Blackboard::totalEnergy() const {

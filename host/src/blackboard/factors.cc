@@ -7,14 +7,17 @@
 namespace crunch {
 
 namespace {
-double deltaTLAt(const Pose2& table, double width, double depth, double leg_side,
-                    const LegHyp& leg, const ModelParams& p, int* corner) {
+constexpr double kMaxP = 1.0 - 1e-9;  // logPresenceOdds' cap on P(H)
+
+double deltaTLAt(const Pose2& table, double c, double s, double width, double depth,
+                 double leg_side, const LegHyp& leg, const ModelParams& p, int* corner) {
   double best = std::numeric_limits<double>::infinity();
   int best_i = 0;
   const Vec2 l = leg.pose.position();
   for (int i = 0; i < 4; ++i) {
     const double d2 =
-        (table.toWorld(ModelParams::cornerOffset(i, width, depth, leg_side)) - l).squaredNorm();
+        (table.toWorld(ModelParams::cornerOffset(i, width, depth, leg_side), c, s) - l)
+            .squaredNorm();
     if (d2 < best) {
       best = d2;
       best_i = i;
@@ -28,17 +31,36 @@ double deltaTLAt(const Pose2& table, double width, double depth, double leg_side
 }
 }  // namespace
 
+FactorLogs::FactorLogs(const ModelParams& p)
+    : c_S(std::log(p.c_S)),
+      c_L(std::log(p.c_L)),
+      alpha_L(std::log(p.alpha_L)),
+      alpha_S(std::log(p.alpha_S)),
+      alpha_W(std::log(p.alpha_W)),
+      delta3(std::log(p.delta3)),
+      p_miss(std::log(p.p_miss)),
+      max_p(std::log(kMaxP)) {}
+
 double deltaTL(const Pose2& table, const LegHyp& leg, const ModelParams& p, int* corner) {
-  return deltaTLAt(table, p.table_width, p.table_depth, p.leg_side, leg, p, corner);
+  return deltaTLAt(table, std::cos(table.theta), std::sin(table.theta), p.table_width,
+                   p.table_depth, p.leg_side, leg, p, corner);
 }
 
 double deltaTLSized(const TableHyp& table, const LegHyp& leg, const ModelParams& p, int* corner) {
-  return deltaTLAt(table.pose, table.width, table.depth, table.leg, leg, p, corner);
+  return deltaTLAt(table.pose, std::cos(table.pose.theta), std::sin(table.pose.theta),
+                   table.width, table.depth, table.leg, leg, p, corner);
 }
 
-double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
+double deltaTLHeld(const TableHyp& table, const LegHyp& leg, const ModelParams& p, int* corner) {
+  return deltaTLAt(table.pose, table.trig.c, table.trig.s, table.width, table.depth, table.leg,
+                   leg, p, corner);
+}
+
+namespace {
+double deltaLSAt(const LegHyp& leg, double c, double sn, const Shapelet& s,
+                 const ModelParams& p) {
   const OrientedRect outline{leg.pose, leg.side, leg.side};
-  const PerimeterPoint pp = closestOnPerimeter(outline, {s.x, s.y});
+  const PerimeterPoint pp = closestOnPerimeter(outline, {s.x, s.y}, c, sn);
   // Side m's surface runs along the leg's y axis for faces 0 and 2, along x for faces 1 and 3:
   // f(theta_L) = theta_L + m pi/2 + pi/2 as a line direction.
   const double side_dir = leg.pose.theta + (pp.side + 1) * (kPi / 2);
@@ -47,16 +69,34 @@ double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
   const double dth = wrapPeriod(side_dir - s.phi, kPi) / p.sigma_theta_shapelet;
   return dr * dr + dth * dth;
 }
+}  // namespace
+
+double deltaLS(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
+  return deltaLSAt(leg, std::cos(leg.pose.theta), std::sin(leg.pose.theta), s, p);
+}
+
+double deltaLSHeld(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
+  return deltaLSAt(leg, leg.trig.c, leg.trig.s, s, p);
+}
 
 double logLegDensity(double delta_tl, bool has_parent, const ModelParams& p) {
-  const double null_term = std::log(p.c_L);
-  if (!has_parent) return null_term;
-  return logAddExp(null_term, std::log(p.alpha_L) - delta_tl);
+  return logLegDensity(delta_tl, has_parent, FactorLogs(p));
+}
+
+double logLegDensity(double delta_tl, bool has_parent, const FactorLogs& k) {
+  if (!has_parent) return k.c_L;
+  return logAddExp(k.c_L, k.alpha_L - delta_tl);
 }
 
 double logShapeletKernel(const LegHyp& leg, const Shapelet& s, const ModelParams& p) {
   if (!legCanCause(leg.side, s)) return -std::numeric_limits<double>::infinity();
   return std::log(p.alpha_S) - deltaLS(leg, s, p);
+}
+
+double logShapeletKernelHeld(const LegHyp& leg, const Shapelet& s, const ModelParams& p,
+                             const FactorLogs& k) {
+  if (!legCanCause(leg.side, s)) return -std::numeric_limits<double>::infinity();
+  return k.alpha_S - deltaLSHeld(leg, s, p);
 }
 
 double deltaWS(const WallHyp& wall, const Shapelet& s, const ModelParams& p) {
@@ -67,8 +107,13 @@ double deltaWS(const WallHyp& wall, const Shapelet& s, const ModelParams& p) {
 }
 
 double logWallKernel(const WallHyp& wall, const Shapelet& s, const ModelParams& p) {
+  return logWallKernel(wall, s, p, FactorLogs(p));
+}
+
+double logWallKernel(const WallHyp& wall, const Shapelet& s, const ModelParams& p,
+                     const FactorLogs& k) {
   if (!wallFaces(wall, s)) return -std::numeric_limits<double>::infinity();
-  return std::log(p.alpha_W) - deltaWS(wall, s, p);
+  return k.alpha_W - deltaWS(wall, s, p);
 }
 
 double logShapeletDensity(std::span<const double> log_kernels, const ModelParams& p) {
@@ -78,8 +123,11 @@ double logShapeletDensity(std::span<const double> log_kernels, const ModelParams
 }
 
 double logPresenceOdds(double log_density, const ModelParams& p) {
-  constexpr double kMaxP = 1.0 - 1e-9;
-  const double log_p = std::min(std::log(p.delta3) + log_density, std::log(kMaxP));
+  return logPresenceOdds(log_density, FactorLogs(p));
+}
+
+double logPresenceOdds(double log_density, const FactorLogs& k) {
+  const double log_p = std::min(k.delta3 + log_density, k.max_p);
   return log_p - std::log1p(-std::exp(log_p));
 }
 

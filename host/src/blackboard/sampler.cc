@@ -70,6 +70,7 @@ const char* acceptanceName(Acceptance a) {
 
 Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
     : bb_(board), opt_(options), rng_(rng) {
+  bb_.setIncremental(opt_.incremental_energy);
   for (int i = opt_.schedule_steps - 1; i >= 0; --i)
     betas_.push_back(std::exp(opt_.schedule_log_top - opt_.schedule_log_step * i));
   order_.reserve(4096);
@@ -94,7 +95,19 @@ void Sampler::anneal() {
   }
 }
 
+namespace {
+// The board is in a sweep (Blackboard::beginSweep) while this lives.
+struct SweepScope {
+  explicit SweepScope(Blackboard& b) : bb(b) { bb.beginSweep(); }
+  ~SweepScope() { bb.endSweep(); }
+  SweepScope(const SweepScope&) = delete;
+  SweepScope& operator=(const SweepScope&) = delete;
+  Blackboard& bb;
+};
+}  // namespace
+
 void Sampler::sweep(double beta) {
+  const SweepScope scope(bb_);
   if (opt_.acceptance == Acceptance::kReversibleJump) {
     sweepReversible(beta);
     return;
@@ -147,6 +160,13 @@ void Sampler::sweep(double beta) {
   }
 }
 
+void Sampler::accepted(bool ok) {
+  stats_.accepted += ok;
+  if (!ok) return;
+  bb_.acceptMove();
+  if (audit_) stats_.audit_cache_max_error = std::max(stats_.audit_cache_max_error, bb_.cacheError());
+}
+
 void Sampler::begin() {
   if (audit_) audit_before_ = bb_.totalEnergy();
 }
@@ -160,7 +180,7 @@ bool Sampler::decide(double delta, double beta) {
   const double a = opt_.acceptance == Acceptance::kTempered ? temperedAcceptance(delta, beta)
                                                             : literalAcceptance(delta, beta);
   const bool ok = rng_.uniform() < a;
-  stats_.accepted += ok;
+  accepted(ok);
   return ok;
 }
 
@@ -192,7 +212,7 @@ int Sampler::parentCandidates(const LegHyp& leg, int32_t exclude, std::array<int
   bb_.tablesNear(leg.pose.position(), reach, [&](int32_t t) {
     const TableHyp& tab = bb_.table(t);
     if (t == exclude || !tab.alive || n >= kMaxCand || tab.n_children >= kMaxChildren) return;
-    const double d = deltaTLSized(tab, leg, p, nullptr);
+    const double d = deltaTLHeld(tab, leg, p, nullptr);
     if (d > cut) return;
     cand[n] = t;
     weight[n++] = p.alpha_L * std::exp(-d);
@@ -341,10 +361,10 @@ void Sampler::proposeLegBirth(const Pose2& pose, double side, int32_t parent, do
   t.tables.add(parent);
   bb_.shapeletsNear(pose.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   const int32_t id = bb_.addLeg(pose, side, parent);
   t.legs.add(id);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) {
     bb_.killLeg(id);
     bb_.releaseLeg(id);
@@ -357,9 +377,9 @@ void Sampler::deathLeg(int32_t id, double beta) {
   t.tables.add(bb_.leg(id).parent);
   bb_.shapeletsNear(bb_.leg(id).pose.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.killLeg(id);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (decide(e1 - e0, beta)) bb_.releaseLeg(id);
   else bb_.reviveLeg(id);
 }
@@ -370,9 +390,9 @@ void Sampler::deathTable(int32_t id, double beta) {
   const TableHyp& tab = bb_.table(id);
   for (int i = 0; i < tab.n_children; ++i) t.legs.add(tab.children[i]);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.killTable(id);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (decide(e1 - e0, beta)) bb_.releaseTable(id);
   else bb_.reviveTable(id);
 }
@@ -386,9 +406,9 @@ void Sampler::parentChange(int32_t leg, double beta) {
   t.tables.add(old_parent);
   t.tables.add(new_parent);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.setParent(leg, new_parent);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.setParent(leg, old_parent);
 }
 
@@ -407,9 +427,9 @@ void Sampler::jitterLeg(int32_t id, double beta) {
   bb_.shapeletsNear(old.position(), t.shapelets);
   bb_.shapeletsNear(moved.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.moveLeg(id, moved);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.moveLeg(id, old);
 }
 
@@ -441,12 +461,12 @@ void Sampler::jitterTable(int32_t id, double beta) {
     }
   }
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.moveTable(id, moved);
   if (rigid)
     for (int i = 0; i < n; ++i)
       bb_.moveLeg(kids[static_cast<size_t>(i)], carried(kid_old[static_cast<size_t>(i)]));
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) {
     if (rigid)
       for (int i = 0; i < n; ++i)
@@ -480,25 +500,31 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   std::array<Pose2, 8> place;
   std::array<double, 8> weight;
   double total = 0.0;
+  const double link_r = p.cornerLinkRadius(), link_r2 = std::pow(link_r, 2);
+  std::array<double, 2> cos_th, sin_th;  // the two orientations' cos/sin, once each
   for (int k = 0; k < 8; ++k) {
     const double th = wrapPeriod(axis + (k / 4) * (kPi / 2), kPi);
+    if (k % 4 == 0) {
+      cos_th[static_cast<size_t>(k / 4)] = std::cos(th);
+      sin_th[static_cast<size_t>(k / 4)] = std::sin(th);
+    }
+    const double c_th = cos_th[static_cast<size_t>(k / 4)], s_th = sin_th[static_cast<size_t>(k / 4)];
     const Pose2 frame{0, 0, th};
-    const Vec2 off = frame.toWorld(p.cornerOffset(k % 4));
+    const Vec2 off = frame.toWorld(p.cornerOffset(k % 4), c_th, s_th);
     place[static_cast<size_t>(k)] = {l.pose.x - off.x(), l.pose.y - off.y(), th};
     double w = 1.0;
     if (opt_.smart_parent) {
       for (int c = 0; c < 4; ++c) {
         if (c == k % 4) continue;
-        const Vec2 corner = place[static_cast<size_t>(k)].toWorld(p.cornerOffset(c));
-        bb_.legsNear(corner, p.cornerLinkRadius(), [&](int32_t o) {
+        const Vec2 corner = place[static_cast<size_t>(k)].toWorld(p.cornerOffset(c), c_th, s_th);
+        bb_.legsNear(corner, link_r, [&](int32_t o) {
           const LegHyp& ol = bb_.leg(o);
-          if (o != leg && ol.alive &&
-              (ol.pose.position() - corner).squaredNorm() <= std::pow(p.cornerLinkRadius(), 2))
+          if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= link_r2)
             w += opt_.smart_parent_gain;
         });
         // A point contact on a leg at that corner (within a leg's half-diagonal of it) counts
         // as that leg would: it is the evidence a leg there will explain.
-        if (free_turn && pointNear(corner, p.cornerLinkRadius())) w += opt_.smart_parent_gain;
+        if (free_turn && pointNear(corner, link_r)) w += opt_.smart_parent_gain;
       }
     }
     weight[static_cast<size_t>(k)] = w;
@@ -516,11 +542,11 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   IdSet<4> adopt;
   if (opt_.smart_parent) {
     for (int c = 0; c < 4; ++c) {
-      const Vec2 corner = pose.toWorld(p.cornerOffset(c));
-      bb_.legsNear(corner, p.cornerLinkRadius(), [&](int32_t o) {
+      const Vec2 corner =
+          pose.toWorld(p.cornerOffset(c), cos_th[static_cast<size_t>(k / 4)], sin_th[static_cast<size_t>(k / 4)]);
+      bb_.legsNear(corner, link_r, [&](int32_t o) {
         const LegHyp& ol = bb_.leg(o);
-        if (o != leg && ol.alive &&
-            (ol.pose.position() - corner).squaredNorm() <= std::pow(p.cornerLinkRadius(), 2))
+        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= link_r2)
           adopt.add(o);
       });
     }
@@ -538,7 +564,7 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   for (int32_t tab : t.tables.span())
     for (int i = 0; i < bb_.table(tab).n_children; ++i) t.legs.add(bb_.table(tab).children[i]);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   const int32_t table = bb_.addTable(pose);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
@@ -572,7 +598,7 @@ bool Sampler::decideNewTable(int32_t table, const Pose2& pose, bool free_turn, T
     }
   }
   t.tables.add(table);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (decide(e1 - e0, beta)) {
     for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
     return true;
@@ -687,7 +713,7 @@ bool Sampler::decideRj(double delta, double beta, double log_q_ratio) {
   ++stats_.proposals;
   const double log_a = beta * delta + log_q_ratio;
   const bool ok = log_a >= 0.0 || std::log(rng_.uniform()) < log_a;
-  stats_.accepted += ok;
+  accepted(ok);
   return ok;
 }
 
@@ -822,10 +848,10 @@ void Sampler::rjLegBirthDeath(int slot, double beta) {
     Touched t;
     bb_.shapeletsNear(pose.position(), t.shapelets);
     begin();
-    const double e0 = bb_.localEnergy(t);
+    const double e0 = bb_.energyBefore(t);
     const int32_t id = bb_.addLeg(pose, kNone);
     t.legs.add(id);
-    const double e1 = bb_.localEnergy(t);
+    const double e1 = bb_.energyAfter(t);
     if (!decideRj(e1 - e0, beta, std::log(b.volume / (n_after * opt_.rj_cell)))) {
       bb_.killLeg(id);
       bb_.releaseLeg(id);
@@ -841,9 +867,9 @@ void Sampler::rjLegBirthDeath(int slot, double beta) {
   t.legs.add(id);
   bb_.shapeletsNear(bb_.leg(id).pose.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.killLeg(id);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (decideRj(e1 - e0, beta, std::log(n * opt_.rj_cell / b.volume))) bb_.releaseLeg(id);
   else bb_.reviveLeg(id);
 }
@@ -859,9 +885,9 @@ void Sampler::rjJitterLeg(int32_t id, double beta) {
   bb_.shapeletsNear(old.position(), t.shapelets);
   bb_.shapeletsNear(moved.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.moveLeg(id, moved);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decideRj(e1 - e0, beta, 0.0)) bb_.moveLeg(id, old);
 }
 
@@ -890,9 +916,9 @@ void Sampler::rjParentChange(int32_t leg, double beta) {
   t.tables.add(old_parent);
   t.tables.add(new_parent);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.setParent(leg, new_parent);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   // The reverse: sampleParent's weights in the new state, excluding the new parent.
   n = parentCandidates(bb_.leg(leg), new_parent, cand, weight);
   double rev_total = 0.0, w_old = 0.0;
@@ -951,11 +977,11 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
     Touched t;
     t.legs.add(leg);
     begin();
-    const double e0 = bb_.localEnergy(t);
+    const double e0 = bb_.energyBefore(t);
     const int32_t table = bb_.addTable(pose);
     bb_.setParent(leg, table);
     t.tables.add(table);
-    const double e1 = bb_.localEnergy(t);
+    const double e1 = bb_.energyAfter(t);
     // Reverse: this leg's kernel kills its sole parent with probability 1.
     if (!decideRj(e1 - e0, beta, -log_q - std::log(opt_.rj_cell))) {
       bb_.setParent(leg, kNone);
@@ -973,9 +999,9 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   t.legs.add(leg);
   t.tables.add(table);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.killTable(table);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (decideRj(e1 - e0, beta, log_q + std::log(opt_.rj_cell))) bb_.releaseTable(table);
   else bb_.reviveTable(table);
 }
@@ -1006,11 +1032,11 @@ void Sampler::rjJitterTable(int32_t id, double beta) {
     }
   }
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.moveTable(id, moved);
   if (rigid)
     for (int i = 0; i < n; ++i) bb_.moveLeg(kids[static_cast<size_t>(i)], kid_new[static_cast<size_t>(i)]);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decideRj(e1 - e0, beta, 0.0)) {
     if (rigid)
       for (int i = 0; i < n; ++i) bb_.moveLeg(kids[static_cast<size_t>(i)], kid_old[static_cast<size_t>(i)]);
@@ -1110,11 +1136,11 @@ void Sampler::rjTableBirthDeath(double beta) {
     Touched t;
     for (int32_t o : kids.span()) t.legs.add(o);
     begin();
-    const double e0 = bb_.localEnergy(t);
+    const double e0 = bb_.energyBefore(t);
     const int32_t table = bb_.addTable(pose);
     for (int32_t o : kids.span()) bb_.setParent(o, table);
     t.tables.add(table);
-    const double e1 = bb_.localEnergy(t);
+    const double e1 = bb_.energyAfter(t);
     const double log_rev = -std::log(static_cast<double>(bb_.liveTables()));
     if (!decideRj(e1 - e0, beta, log_rev - log_fwd - log_cell)) {
       for (int32_t o : kids.span()) bb_.setParent(o, kNone);
@@ -1132,7 +1158,7 @@ void Sampler::rjTableBirthDeath(double beta) {
   t.tables.add(table);
   for (int i = 0; i < tab.n_children; ++i) t.legs.add(tab.children[i]);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.killTable(table);
   // The reverse birth must adopt exactly these children.
   IdSet<4 * kMaxChildren> kids;
@@ -1142,7 +1168,7 @@ void Sampler::rjTableBirthDeath(double beta) {
     bb_.reviveTable(table);
     return;
   }
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   const double log_rev = -std::log(static_cast<double>(bb_.liveLegs())) +
                          logSmartBirthDensity(pose, kids);
   if (decideRj(e1 - e0, beta, log_rev + log_cell - log_fwd)) bb_.releaseTable(table);
@@ -1177,9 +1203,9 @@ void Sampler::resizeTable(int32_t id, double beta) {
   t.tables.add(id);
   for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.reshapeTable(id, pose, w, d, old.leg);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
 }
 
@@ -1194,9 +1220,9 @@ void Sampler::tableLegSide(int32_t id, double beta) {
   t.tables.add(id);
   for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.reshapeTable(id, old.pose, old.width, old.depth, leg);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
 }
 
@@ -1213,9 +1239,9 @@ void Sampler::legSide(int32_t id, double beta) {
   t.tables.add(l.parent);
   bb_.shapeletsNear(l.pose.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   bb_.setLegSide(id, side);
-  const double e1 = bb_.localEnergy(t);
+  const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.setLegSide(id, old);
 }
 
@@ -1369,7 +1395,7 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
       if (pointSupported(bb_.leg(o).pose.position()))
         bb_.shapeletsNear(bb_.leg(o).pose.position(), t.shapelets);
   begin();
-  const double e0 = bb_.localEnergy(t);
+  const double e0 = bb_.energyBefore(t);
   const int32_t table = bb_.addTable(pose, tw, td, table_leg);
   bb_.setLegSide(leg, table_leg);
   for (int32_t o : adopt.span()) bb_.setLegSide(o, table_leg);

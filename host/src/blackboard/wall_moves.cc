@@ -153,11 +153,11 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   bb_.collectShapeletsNearSegment(a, b, wall_slots_);
   for (int32_t l : t.legs.span()) bb_.collectShapeletsNearLeg(l, wall_slots_);
   begin();
-  const double e0 = bb_.localEnergy(t, wall_slots_);
+  const double e0 = bb_.energyBefore(t, wall_slots_);
   for (int32_t l : t.legs.span()) bb_.killLeg(l);
   const int32_t id = bb_.addWall(a, b);
   t.walls.add(id);
-  const double e1 = bb_.localEnergy(t, wall_slots_);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
   if (decide(e1 - e0, beta)) {
     for (int32_t l : t.legs.span()) bb_.releaseLeg(l);
     return;
@@ -186,9 +186,9 @@ void Sampler::deathWall(int32_t id, double beta) {
   Touched t;
   t.walls.add(id);
   begin();
-  const double e0 = bb_.localEnergy(t, wall_slots_);
+  const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.killWall(id);
-  const double e1 = bb_.localEnergy(t, wall_slots_);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
   if (decide(e1 - e0, beta)) {
     bb_.releaseWall(id);
     return;
@@ -219,9 +219,9 @@ void Sampler::moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta) 
   Touched t;
   t.walls.add(id);
   begin();
-  const double e0 = bb_.localEnergy(t, wall_slots_);
+  const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.moveWall(id, a, b);
-  const double e1 = bb_.localEnergy(t, wall_slots_);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
   if (!decide(e1 - e0, beta)) bb_.moveWall(id, w.a, w.b);
 }
 
@@ -302,10 +302,10 @@ void Sampler::mergeWall(int32_t id, double beta) {
   t.walls.add(id);
   t.walls.add(partner);
   begin();
-  const double e0 = bb_.localEnergy(t, wall_slots_);
+  const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.killWall(partner);
   bb_.moveWall(id, a, b);
-  const double e1 = bb_.localEnergy(t, wall_slots_);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
   if (decide(e1 - e0, beta)) {
     bb_.releaseWall(partner);
     return;
@@ -337,11 +337,11 @@ void Sampler::splitWall(int32_t id, double beta) {
   Touched t;
   t.walls.add(id);
   begin();
-  const double e0 = bb_.localEnergy(t, wall_slots_);
+  const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.moveWall(id, a1, b1);
   const int32_t nid = bb_.addWall(a2, b2);
   t.walls.add(nid);
-  const double e1 = bb_.localEnergy(t, wall_slots_);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
   if (decide(e1 - e0, beta)) return;
   bb_.killWall(nid);
   bb_.releaseWall(nid);

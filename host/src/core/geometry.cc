@@ -6,7 +6,11 @@
 namespace crunch {
 
 PerimeterPoint closestOnPerimeter(const OrientedRect& r, const Vec2& p) {
-  const Vec2 q = r.pose.toLocal(p);
+  return closestOnPerimeter(r, p, std::cos(r.pose.theta), std::sin(r.pose.theta));
+}
+
+PerimeterPoint closestOnPerimeter(const OrientedRect& r, const Vec2& p, double c, double s) {
+  const Vec2 q = r.pose.toLocal(p, c, s);
   const double hx = 0.5 * r.size_x, hy = 0.5 * r.size_y;
   // Candidate on each face: clamp along the face.
   const std::array<Vec2, 4> cand = {Vec2{hx, std::clamp(q.y(), -hy, hy)},
@@ -23,7 +27,7 @@ PerimeterPoint closestOnPerimeter(const OrientedRect& r, const Vec2& p) {
       best.point = cand[i];
     }
   }
-  best.point = r.pose.toWorld(best.point);
+  best.point = r.pose.toWorld(best.point, c, s);
   return best;
 }
 
@@ -44,12 +48,18 @@ bool overlaps(const OrientedRect& a, const OrientedRect& b) {
   const double dx = a.pose.x - b.pose.x, dy = a.pose.y - b.pose.y;
   const double reach = a.circumradius() + b.circumradius();
   if (dx * dx + dy * dy >= reach * reach) return false;
-  const auto ca = a.corners(), cb = b.corners();
-  const std::array<Vec2, 4> axes = {
-      Vec2{std::cos(a.pose.theta), std::sin(a.pose.theta)},
-      Vec2{-std::sin(a.pose.theta), std::cos(a.pose.theta)},
-      Vec2{std::cos(b.pose.theta), std::sin(b.pose.theta)},
-      Vec2{-std::sin(b.pose.theta), std::cos(b.pose.theta)}};
+  return overlaps(a, {std::cos(a.pose.theta), std::sin(a.pose.theta), a.circumradius()}, b,
+                  {std::cos(b.pose.theta), std::sin(b.pose.theta), b.circumradius()});
+}
+
+bool overlaps(const OrientedRect& a, const RectTrig& ta, const OrientedRect& b,
+              const RectTrig& tb) {
+  const double dx = a.pose.x - b.pose.x, dy = a.pose.y - b.pose.y;
+  const double reach = ta.radius + tb.radius;
+  if (dx * dx + dy * dy >= reach * reach) return false;
+  const auto ca = a.corners(ta.c, ta.s), cb = b.corners(tb.c, tb.s);
+  const std::array<Vec2, 4> axes = {Vec2{ta.c, ta.s}, Vec2{-ta.s, ta.c}, Vec2{tb.c, tb.s},
+                                    Vec2{-tb.s, tb.c}};
   constexpr double kTouch = 1e-9;  // touching faces do not count as overlap
   for (const Vec2& n : axes) {
     const auto [alo, ahi] = project(ca, n);

@@ -18,6 +18,17 @@
 // A move's acceptance needs only the change of J, which localEnergy() computes over the
 // hypotheses and shapelets the move touches: the Markov blankets of eq. 29.
 //
+// Incremental energies (issue 15). Each table's and leg's own terms (its presence odds, missing
+// legs, negative evidence and size prior: everything but its pair terms) and each shapelet's
+// noisy-OR term (eq. 17) are cached. A move asks energyBefore() (the cached terms, the pair terms
+// counted afresh) and energyAfter() (everything afresh, kept aside); acceptMove() makes the kept
+// values the cache, and a refused move restores the state exactly, so the cache stays right.
+// Between beginSweep() and endSweep() every mutation must belong to such a move; any other
+// mutation, a shapelet pushed, or a negative-evidence grid that gained rays invalidates the cache
+// (one generation counter), so callers other than the sampler need not know it exists. The
+// brute-force audit (Sampler::setAudit) checks every move's change against totalEnergy() and
+// every cached term against its fresh value.
+//
 // Mutations keep the spatial hashes and parent/child links consistent. Killing a hypothesis
 // keeps its record so the move can be undone; release() returns the id to the pool once the
 // move is committed. Nothing here allocates after warm-up (see pool.h, spatial_hash.h).
@@ -25,6 +36,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <span>
@@ -75,7 +87,10 @@ class Blackboard {
   const ModelParams& params() const { return p_; }
 
   // Attaches negative evidence (not owned; must outlive the blackboard, or pass nullptr).
-  void setFreeSpace(const FreeSpaceGrid* grid) { free_ = grid; }
+  void setFreeSpace(const FreeSpaceGrid* grid) {
+    free_ = grid;
+    ++gen_;
+  }
 
   // ---- Working memory (the queue of the most recent shapelets, §2.7) ----
   // Adds a shapelet, evicting the oldest when full. Returns its slot.
@@ -111,7 +126,7 @@ class Blackboard {
   void moveLeg(int32_t id, const Pose2& pose);
   // Moves and resizes a table at once; children keep their parent, their corners are re-found.
   void reshapeTable(int32_t id, const Pose2& pose, double width, double depth, double leg);
-  void setLegSide(int32_t id, double side) { legs_[id].side = side; }
+  void setLegSide(int32_t id, double side);
 
   // ---- Walls (ModelParams::walled(): --model walls or rooms; none under kPaper) ----
   int32_t addWall(const Vec2& a, const Vec2& b);
@@ -182,8 +197,27 @@ class Blackboard {
   // The same plus the shapelet terms of `more_shapelets` (slots not in t.shapelets): a wall's
   // move changes the terms of every shapelet along it, more than Touched holds.
   double localEnergy(const Touched& t, std::span<const int32_t> more_shapelets) const;
-  // J over the whole blackboard by brute force (tests only: quadratic).
+  // J over the whole blackboard by brute force (tests only: quadratic). It uses the reference
+  // form of every factor (factors.h), not the cached constants and cos/sin.
   double totalEnergy() const;
+
+  // ---- Incremental energies (see the top) ----
+  // The sampler's sweep: between the two, mutations are moves (energyBefore, energyAfter, then
+  // acceptMove or an exact undo). Outside, a mutation invalidates the cache.
+  void beginSweep() { in_sweep_ = true; }
+  void endSweep() { in_sweep_ = false; }
+  // localEnergy(t, more) of the state now, from the cache where it holds the term (computing and
+  // caching it where not). Without incremental energies, localEnergy itself.
+  double energyBefore(const Touched& t, std::span<const int32_t> more = {});
+  // localEnergy(t, more) afresh; the own and shapelet terms are kept for acceptMove().
+  double energyAfter(const Touched& t, std::span<const int32_t> more = {});
+  // The state of the last energyAfter() is kept: its terms become the cache.
+  void acceptMove();
+  // Off: energyBefore() and energyAfter() are localEnergy() (the reference path, both sides of
+  // every move evaluated afresh; benchmarks compare the two). On by default.
+  void setIncremental(bool on);
+  // The largest |cached - fresh| over every cached term (tests: the audit).
+  double cacheError() const;
 
   // Removes every hypothesis and shapelet.
   void clear();
@@ -191,10 +225,25 @@ class Blackboard {
  private:
   // The corner of a table at `table` that `leg` belongs to: the argmin of eq. 10.
   int nearestCorner(const TableHyp& table, const LegHyp& leg) const;
+  // Sets a record's pose with its cos/sin and circumradius (TableHyp::trig, LegHyp::trig).
+  void setTablePose(TableHyp& t, const Pose2& pose);
+  void setLegPose(LegHyp& l, const Pose2& pose);
   void linkChild(int32_t table, int32_t leg);
   void unlinkChild(int32_t table, int32_t leg);
   double tableTerms(int32_t id, const Touched& t) const;
   double legTerms(int32_t id, const Touched& t) const;
+  // A live hypothesis' own terms (all but its pairs with others), and `own` plus its pair terms.
+  double tableOwnTerm(const TableHyp& tab) const;
+  double tablePairTerms(int32_t id, const Touched& t, double own) const;
+  double legOwnTerm(const LegHyp& l) const;
+  double legPairTerms(int32_t id, const Touched& t, double own) const;
+  // Cached own and shapelet terms (computed and stored where not cached).
+  double cachedTableOwn(int32_t id);
+  double cachedLegOwn(int32_t id);
+  double cachedShapeletTerm(int slot);
+  void mutated() {
+    if (!in_sweep_) ++gen_;
+  }
   double shapeletTerm(int slot) const;
   // The negative-evidence term of a leg-sized square at `pose` (0 without a grid).
   double freeTerm(const Pose2& pose, double side) const;
@@ -242,6 +291,11 @@ class Blackboard {
   int live_tables_ = 0;
   int live_legs_ = 0;
   double log_eps_a_, log_eps_b_, log_eps_c_, table_odds_;
+  // Constants of the terms, computed once (issue 15).
+  FactorLogs logs_;
+  double orphan_leg_odds_;     // a leg's presence odds under the null prior
+  double paper_table_radius_;  // circumradius of the paper's one table size
+  double max_table_radius_, max_leg_side_, shapelet_link_r_, wall_link_r_;
   const FreeSpaceGrid* free_ = nullptr;
   Pool<WallHyp> walls_;
   SpatialHash wall_hash_;
@@ -249,6 +303,22 @@ class Blackboard {
   uint32_t stamp_ = 0;
   int live_walls_ = 0;
   double wall_odds_ = 0.0;
+  // Incremental energies: the generation a cached term must carry to be valid, the shapelets'
+  // cached terms, and the fresh terms of the last energyAfter() (capacity fixed up front).
+  bool incremental_ = true;
+  bool in_sweep_ = false;
+  uint64_t gen_ = 1;
+  long long rays_seen_ = -1;
+  std::vector<double> slot_term_;
+  std::vector<uint64_t> slot_gen_;
+  struct Kept {
+    int32_t id;
+    double value;
+  };
+  std::array<Kept, 8> kept_tables_;
+  std::array<Kept, 4 * kMaxChildren> kept_legs_;
+  int n_kept_tables_ = 0, n_kept_legs_ = 0;
+  std::vector<Kept> kept_slots_;
 };
 
 }  // namespace crunch

@@ -27,6 +27,14 @@ struct TableHyp {
   uint8_t n_children = 0;
   std::array<int32_t, kMaxChildren> children{};
   std::array<uint8_t, 4> corner_count{};  // children at each corner
+  // cos and sin of pose.theta and the top's circumradius, as the Blackboard holding the record
+  // set them with its pose and size (issue 15: no libm call per look). A record built or changed
+  // elsewhere does not keep them; only the Blackboard's own energy code reads them.
+  RectTrig trig;
+  // The Blackboard's cache of this record's own terms of J (incremental energies, blackboard.h):
+  // valid while own_gen equals the board's generation.
+  double own = 0.0;
+  uint64_t own_gen = 0;
 
   // Missing legs m of eq. 24: corners no child occupies.
   // Offset of corner i's leg centre in the table frame (ModelParams::cornerOffset).
@@ -49,6 +57,12 @@ struct LegHyp {
   int32_t parent = kNone;  // the table that caused it (eq. 8), or none (null prior, eq. 13)
   int8_t corner = -1;      // the parent's corner nearest this leg (the argmin of eq. 10)
   bool alive = false;
+  // cos and sin of pose.theta and the square's circumradius, kept by the Blackboard as TableHyp's.
+  RectTrig trig;
+  // The Blackboard's cache of this record's own terms of J (incremental energies, blackboard.h):
+  // valid while own_gen equals the board's generation.
+  double own = 0.0;
+  uint64_t own_gen = 0;
 };
 
 // A wall (--model walls or rooms only): the finite segment a..b of a flat surface, which causes the

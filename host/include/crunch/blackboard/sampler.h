@@ -78,6 +78,10 @@ struct SamplerOptions {
   // Each leg near another corner of a placement adds this to its weight (base weight 1).
   double smart_parent_gain = 8.0;
   bool prune = true;
+  // Incremental energies (Blackboard::energyBefore): a move evaluates the terms it changes once,
+  // after the move, taking the before side from the cache. Off: both sides afresh (the reference
+  // path; the same chain up to rounding, for benchmarks).
+  bool incremental_energy = true;
   // Acceptance::kReversibleJump only (sweepReversible). Q(pa(S)) there is uniform over a box
   // in the shapelet's frame: along the face within half a leg side plus rj_box_margin, behind
   // it at half a leg side (up to half the diagonal for a point contact) give or take
@@ -138,6 +142,9 @@ struct SamplerStats {
   // With setAudit(true): the largest |local change - brute-force change| of the log joint seen
   // over all moves. Tests use it to prove each move's Markov blanket is complete.
   double audit_max_error = 0.0;
+  // With setAudit(true): the largest |cached - fresh| of any term the blackboard holds cached,
+  // checked after every accepted move (Blackboard::cacheError).
+  double audit_cache_max_error = 0.0;
 };
 
 class Sampler {
@@ -176,6 +183,8 @@ class Sampler {
   };
   void begin();
   bool decide(double delta, double beta);
+  // Counts the decision; an accepted move's terms become the blackboard's cache.
+  void accepted(bool ok);
   // Reversible jump: accept with min(1, exp(beta * delta + log_q_ratio)), log_q_ratio =
   // log q(reverse) - log q(forward) including Jacobians.
   bool decideRj(double delta, double beta, double log_q_ratio);
