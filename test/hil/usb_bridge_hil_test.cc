@@ -5,7 +5,7 @@
 // frames from the firmware core (VirtualWhiskerBoard), with corrupt frames, an unplug and a
 // replug mid-stream, a busy interface and a missing device. Every wait is on a condition with a
 // deadline.
-#define CATCH_CONFIG_RUNNER
+// main() is at the end; Catch2's implementation is compiled once, in crunch_catch.
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <condition_variable>
