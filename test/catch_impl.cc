@@ -3,3 +3,9 @@
 // main(). Compiling it is about 33 s of CPU at -O3 (docs/BENCHMARKS.md, "CI time").
 #define CATCH_CONFIG_RUNNER
 #include <catch2/catch.hpp>
+
+#include "support/catch_session.h"
+
+int crunch::testing::runCatchSession(int argc, char* argv[]) {
+  return Catch::Session().run(argc, argv);
+}
