@@ -303,18 +303,28 @@ Map Mapper::snapshot() const {
 Map Mapper::finish() {
   Map map = std::move(map_);
   map_ = Map{};
+  infer(map, rng_);
+  return map;
+}
+
+Map Mapper::inferNow(Rng& rng) const {
+  Map map = map_;
+  infer(map, rng);
+  return map;
+}
+
+void Mapper::infer(Map& map, Rng& rng) const {
   map.stats.poses = pose_count_;
   map.stats.shapelets = static_cast<int>(map.shapelets.size());
   map.stats.proposals = sampler_.stats().proposals;
   if (options_.global_sweeps > 0 && !map.shapelets.empty()) {
     map.tables =
-        globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr, rng_);
+        globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr, rng);
   } else {
     map.tables = fuseTables(map.per_pose, options_.fuse);
   }
   map.stats.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  return map;
 }
 
 }  // namespace crunch
