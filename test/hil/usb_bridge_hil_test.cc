@@ -5,7 +5,7 @@
 // frames from the firmware core (VirtualWhiskerBoard), with corrupt frames, an unplug and a
 // replug mid-stream, a busy interface and a missing device. Every wait is on a condition with a
 // deadline.
-#define CATCH_CONFIG_RUNNER
+// main() is at the end; Catch2's implementation is compiled once, in crunch_catch.
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <condition_variable>
@@ -26,6 +26,7 @@
 #include "crunch/io/usb_bridge.h"
 #include "crunch_sim/virtual_usb_bridge.h"
 #include "crunch_sim/virtual_whisker_board.h"
+#include "support/catch_session.h"
 
 using crunch::io::BridgeStreamDecoder;
 using crunch::io::DecodedFrame;
@@ -393,5 +394,5 @@ int main(int argc, char** argv) {
   // The virtual device needs libumockdev-preload in this process (docs/USB.md); a real one
   // does not, and must not be hidden behind an empty testbed.
   if (std::getenv("CRUNCH_HIL_USB") == nullptr) VirtualUsbBridge::ensurePreloaded(argc, argv);
-  return Catch::Session().run(argc, argv);
+  return crunch::testing::runCatchSession(argc, argv);
 }
