@@ -285,7 +285,7 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
 
 int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
   const auto t0 = std::chrono::steady_clock::now();
-  auto replayed = session::replayRecording(opt.recording);
+  auto replayed = session::replayRecording(opt.recording, opt.threads);
   if (!replayed) {  // the header or the settings: nothing written
     err << "crunchhost: --replay: " << replayed.error().message << "\n";
     return 2;
