@@ -55,7 +55,8 @@ TEST_CASE("GlobalChain: chains annealing on two threads perform no heap allocati
   parallelFor(kChains, 2, [&](int c) {
     // The counter counts on this thread: one allocation shows as one.
     const long long p0 = t_allocations;
-    delete new int(c);
+    int* volatile escaped = new int(c);  // volatile: the pair cannot be elided
+    delete escaped;
     probe[static_cast<size_t>(c)] = t_allocations - p0;
     const long long before = t_allocations;
     chains[static_cast<size_t>(c)]->anneal();

@@ -332,12 +332,16 @@ TEST_CASE("Mapper: the global inference gives the same map on 1, 2 and 3 threads
     Mapper m(mounts, lo, hi, o);
     for (std::size_t t = 0; t < script.poses.size(); ++t)
       m.addPose(script.poses[t], script.reports[t], script.rays[t]);
-    return m.finish();
+    const long long per_pose = m.snapshot().stats.proposals;
+    Map map = m.finish();
+    CHECK(map.stats.proposals > per_pose);  // the chains ran
+    return map;
   };
   const Map one = run(1);
   CHECK(one.stats.global_threads == 1);
   CHECK(one.stats.global_s > 0.0);
-  CHECK(one.stats.proposals > 10000);
+  // requireSameMap compares the proposals too: their count depends on every draw of every
+  // chain, so a chain that drew from another's stream, or ran twice, would show.
   for (const int threads : {2, 3}) {
     INFO("threads " << threads);
     const Map many = run(threads);
