@@ -102,7 +102,10 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
                  "signal models for --sensor-model physics (default: the shipped "
                  "models/sim_models.json)")
       ->check(CLI::ExistingFile);
-  app.add_option("--seed", opt.seed, "seed of every random choice")->capture_default_str();
+  // A negative seed would wrap to 2^64 - 1 in the conversion: refused as the contract's exit 2.
+  app.add_option("--seed", opt.seed, "seed of every random choice")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   app.add_option("--out", opt.out_dir, "output directory")->capture_default_str();
   app.add_flag("--json", opt.json_progress, "machine-readable progress on stdout");
   auto& s = opt.mapping.sampler;
@@ -177,6 +180,7 @@ CLI::App* addTrain(CLI::App& app, TrainOptions& o) {
                "signal models, write them and the paper's figures (docs/TRAINING.md)");
   train->add_option("--out", o.out_dir, "output directory")->capture_default_str();
   train->add_option("--seed", o.seed, "seed of every jitter and sensor noise")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   train->add_option("--models-out", o.models_out,
                     "also write the models here (e.g. models/sim_models.json)");

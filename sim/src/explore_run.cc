@@ -88,6 +88,10 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
   std::vector<ContactReport> reports;
   std::vector<FreeRay> free_rays;
   std::vector<exploration::CurvePoint> curve;
+  // The curve's inferences draw from their own stream: the run's final map does not depend on
+  // how often it is scored.
+  Rng curve_rng(mopt.seed ^ 0xC0A5EC0ull);
+  double next_curve_m = 0.0;
   // Set by the caller before each whisk: the travel so far, for the curve.
   double travel_now = 0.0;
   int whisks_now = 0;
@@ -104,8 +108,11 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
     }
     const Map snap = mapper.snapshot();
     known.setMapObstacles(snap.tables, snap.walls);
-    const Evaluation ev = evaluate(snap, scene.scene, tol);
-    curve.push_back({travel_now, whisks_now + 1, ev.recall, ev.precision, ev.f1});
+    if (curve.empty() || travel_now >= next_curve_m) {
+      const Evaluation ev = evaluate(mapper.inferNow(curve_rng), scene.scene, tol);
+      curve.push_back({travel_now, whisks_now + 1, ev.recall, ev.precision, ev.f1});
+      next_curve_m = (std::floor(travel_now / eo.curve_step_m) + 1.0) * eo.curve_step_m;
+    }
   };
   auto samples = [&](int n, std::vector<MapSample>& out) {
     mapper.drawSamples(n, eo.sample_beta, eo.sample_sweeps, out);
@@ -221,8 +228,14 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
     run.report = loop.report();
   }
   run.report.teleport = eo.teleport;
-  run.report.curve = std::move(curve);
   run.map = mapper.finish();
+  // The curve ends on the final map (the report's accuracy), at the run's whole travel.
+  if (run.report.whisks > 0) {
+    const Evaluation ev = evaluate(run.map, scene.scene, tol);
+    if (!curve.empty() && curve.back().whisks == run.report.whisks) curve.pop_back();
+    curve.push_back({run.report.travel_m, run.report.whisks, ev.recall, ev.precision, ev.f1});
+  }
+  run.report.curve = std::move(curve);
   run.map.stats.poses = run.report.whisks;
   run.map.stats.skipped_poses = grid ? scene.skipped : 0;
   return run;

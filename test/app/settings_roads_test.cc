@@ -3,6 +3,7 @@
 // nothing written. This file covers the command line (`--sim`) and the sweep grid (`sweep`);
 // the recording-metadata road (`--replay`) is covered in test/session. Each case runs the
 // crunchhost binary as a user would.
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <catch2/catch.hpp>
@@ -65,6 +66,36 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
                           Case{"--smart-gain -100", "smart_parent_gain"},
                           Case{"--noise bogus", "noise"});
   expectRefused("--sim", c);
+}
+
+TEST_CASE("Settings: a bad seed or scene file is exit 2, named, nothing written (issue 16)",
+          "[settings]") {
+  TempDir files;
+  auto writeFile = [&](const std::string& name, const std::string& bytes) {
+    const std::string path = files.file(name);
+    FILE* f = std::fopen(path.c_str(), "wb");
+    REQUIRE(f != nullptr);
+    std::fwrite(bytes.data(), 1, bytes.size(), f);
+    std::fclose(f);
+    return path;
+  };
+  const std::string arena = R"("arena": {"width": 3.0, "depth": 2.5}, "tables": [])";
+  const std::string dup = writeFile("dup.json", "{" + arena + ", " + arena + "}");
+  const std::string bom = writeFile("bom.json", "\xEF\xBB\xBF{" + arena + "}");
+  const std::string nul = writeFile("nul.json", "{" + arena + "}" + std::string(1, '\0') + "junk");
+  const std::string fifo = files.file("fifo.json");
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);  // nobody writes it: reading would block forever
+  const std::string dup_args = "--scene " + dup, bom_args = "--scene " + bom,
+                    nul_args = "--scene " + nul, fifo_args = "--scene " + fifo;
+  const Case cases[] = {Case{"--seed -1", "--seed"}, Case{"--seed 1e23", "--seed"},
+                        Case{"--seed abc", "--seed"},
+                        Case{dup_args.c_str(), "dup.json: arena: the key appears twice"},
+                        Case{bom_args.c_str(), "bom.json: byte 0: a UTF-8 byte-order mark"},
+                        Case{nul_args.c_str(), "nul.json: line 1, column"},
+                        Case{fifo_args.c_str(), "fifo.json: cannot read scene file: not a "
+                                                "regular file"},
+                        Case{"--scene /dev/zero", "/dev/zero: cannot read scene file"}};
+  for (const Case& c : cases) expectRefused("--sim", c);
 }
 
 TEST_CASE("Settings: a bad --explore setting is exit 2, named, nothing written", "[settings]") {

@@ -77,7 +77,7 @@ TEST_CASE("sweep-chart draws the Pareto and noise charts and a summary", "[sweep
   CHECK(r.out.find("mean recall below 0.5 from sigma_r = 25 mm") != std::string::npos);
 }
 
-TEST_CASE("sweep-chart without --out writes beside sweep.json; one setting draws only noise",
+TEST_CASE("sweep-chart without --out writes beside sweep.json, one setting draws only noise",
           "[sweep_chart]") {
   TempDir in;
   Json rows = Json::array();
@@ -111,7 +111,7 @@ TEST_CASE("sweep-chart refuses bad input: exit 2, the file named, nothing writte
   SECTION("missing file") { refused("cannot read"); }
   SECTION("not JSON") {
     write(path, "[{\"f1\": ");
-    refused("not valid JSON");
+    refused("parse error at line 1, column 9");  // the place, from the strict reader
   }
   SECTION("not an array") {
     write(path, "{}");

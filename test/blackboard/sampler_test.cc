@@ -125,7 +125,7 @@ TEST_CASE("Sampler: every reversible-jump move's local energy change equals the 
   CHECK(sampler.stats().audit_max_error < 1e-9);
 }
 
-TEST_CASE("Sampler: reversible-jump options are validated; acceptance names round-trip",
+TEST_CASE("Sampler: reversible-jump options are validated, acceptance names round-trip",
           "[blackboard]") {
   SamplerOptions o;
   o.rj_moves = {0, 0, 0, 0, 0, 0};

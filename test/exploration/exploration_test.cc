@@ -40,7 +40,7 @@ TEST_CASE("explorePolicyByName: the five names round-trip, others name --explore
   CHECK(bad.error().message.find("spiral") != std::string::npos);
 }
 
-TEST_CASE("exploreOptionsFromFlags: no policy is no exploration; budgets need one and are checked",
+TEST_CASE("exploreOptionsFromFlags: no policy is no exploration, budgets need one and are checked",
           "[exploration]") {
   using crunch::exploration::exploreOptionsFromFlags;
   const auto none = exploreOptionsFromFlags(std::nullopt, std::nullopt, std::nullopt);

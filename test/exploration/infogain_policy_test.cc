@@ -88,7 +88,7 @@ TEST_CASE("Infogain: rival tables send the robot to touch a disputed leg (Fig. 7
   CHECK(shared.sample_bits == 0.0);
 }
 
-TEST_CASE("Infogain: draws that agree are worth nothing; a known empty room stops the run",
+TEST_CASE("Infogain: draws that agree are worth nothing, a known empty room stops the run",
           "[exploration][infogain]") {
   World w;
   knownRoomWithTouchedLegs(w);
@@ -141,7 +141,7 @@ TEST_CASE("Infogain: unswept space is worth the Poisson prior's bits, and the ch
   CHECK(a.value(again, *da.goal).score == 0.0);
 }
 
-TEST_CASE("Infogain: the region's edges are known walls; draws disagreeing only on how far a "
+TEST_CASE("Infogain: the region's edges are known walls, draws disagreeing only on how far a "
           "wall runs along an edge carry no information", "[exploration][infogain]") {
   World w;
   w.known.markBody({1.5, 1.5}, 5.0);

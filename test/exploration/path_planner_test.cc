@@ -60,7 +60,7 @@ TEST_CASE("planPath: goes through the doorway and keeps the robot's disc off the
   CHECK(plan->length <= plan->cost + 1e-9);
 }
 
-TEST_CASE("planPath: a closed wall makes the goal unreachable; a blocked goal too",
+TEST_CASE("planPath: a closed wall makes the goal unreachable, a blocked goal too",
           "[exploration]") {
   KnownSpace k({0, 0}, {4, 2}, 0.05);
   for (double y = 0.025; y < 2.0; y += 0.05) k.markContact({2.0, y});

@@ -8,7 +8,7 @@ using namespace crunch;
 using namespace crunch::exploration;
 using crunch::exploration::testing::PolicyWorld;
 
-TEST_CASE("random policy: same seed same poses; never blocked, never unreachable",
+TEST_CASE("random policy: same seed same poses, never blocked, never unreachable",
           "[exploration]") {
   PolicyWorld w({4, 2});
   for (double y = 0.025; y < 2.0; y += 0.05) w.known.markContact({2.0, y});  // closed wall

@@ -293,13 +293,13 @@ void mapsEveryTable(const HilScene& hil, int seconds) {
   checkReplaySameMap(out, dir.path() / "replay");
 }
 
-TEST_CASE("Robot: the virtual robot maps the table of hil_one_table within 5 cm and 5 deg; "
+TEST_CASE("Robot: the virtual robot maps the table of hil_one_table within 5 cm and 5 deg, "
           "--replay gives the same map",
           "[.][hil-map]") {
   mapsEveryTable(kOneTable, kOneTableSeconds);
 }
 
-TEST_CASE("Robot: the virtual robot maps both tables of hil_two_tables within 5 cm and 5 deg; "
+TEST_CASE("Robot: the virtual robot maps both tables of hil_two_tables within 5 cm and 5 deg, "
           "--replay gives the same map",
           "[.][hil-map]") {
   mapsEveryTable(kTwoTables, kTwoTablesSeconds);

@@ -212,7 +212,7 @@ TEST_CASE("Evaluation: with sizes judged, a table of the wrong size does not mat
   CHECK_FALSE(std::isfinite(crunch::matchToleranceFor(crunch::ModelParams{}).size));
 }
 
-TEST_CASE("Evaluation: a w x d table at theta is the d x w one at theta + pi/2; a square's angle "
+TEST_CASE("Evaluation: a w x d table at theta is the d x w one at theta + pi/2, a square's angle "
           "means modulo pi/2",
           "[mapping]") {
   Scene s = emptyScene();

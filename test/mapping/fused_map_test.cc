@@ -52,7 +52,7 @@ TEST_CASE("Fused map: with sizes compared, a chair and a table at one spot are t
   CHECK((chair || table));
 }
 
-TEST_CASE("Fused map: a cluster's size is its members' mean; a square's angle is modulo pi/2",
+TEST_CASE("Fused map: a cluster's size is its members' mean, a square's angle is modulo pi/2",
           "[mapping]") {
   FuseOptions opt;
   opt.compare_sizes = true;

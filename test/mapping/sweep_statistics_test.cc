@@ -102,7 +102,7 @@ TEST_CASE("noiseLevels: the paper's setting across sigma_r, or none with one lev
   CHECK(noiseLevels(load(one)).empty());
 }
 
-TEST_CASE("loadSweepSummary: rows of two object models average apart; no model column is paper",
+TEST_CASE("loadSweepSummary: rows of two object models average apart, no model column is paper",
           "[sweep_statistics]") {
   Json rows = Json::array();
   for (const std::string model : {"paper", "rooms"}) {

@@ -248,7 +248,7 @@ TEST_CASE("RobotController: a contact starts a body whisk with start and end mar
                                   static_cast<int>(io::MarkKind::kWhiskEnd)});
 }
 
-TEST_CASE("RobotController: the bridge lost pauses the robot; back, it roams again", "[session]") {
+TEST_CASE("RobotController: the bridge lost pauses the robot, back, it roams again", "[session]") {
   Rig rig;
   rig.controller->start("test robot");
   REQUIRE(rig.stepUntil([&] { return rig.controller->stage() == Stage::kRoaming; }, 3.0));

@@ -100,7 +100,7 @@ TEST_CASE("OdometryTrack: both directions, reversals and a pause mid-turn", "[un
   CHECK(worstError(track, heading, 0.0, 10.0) <= 0.75);
 }
 
-TEST_CASE("OdometryTrack: poses settle after the next knots or the longest gap; position is "
+TEST_CASE("OdometryTrack: poses settle after the next knots or the longest gap, position is "
           "interpolated between packets",
           "[unit]") {
   OdometryTrack track;

@@ -131,7 +131,7 @@ TEST_CASE("SensingChain: each sample carries the pose given with the bytes that 
   CHECK(c.poseAtSample(500).x == poseOfTick(2000).x);
 }
 
-TEST_CASE("SensingChain: timed samples wait for their pose; live detectors do not wait",
+TEST_CASE("SensingChain: timed samples wait for their pose, live detectors do not wait",
           "[session]") {
   auto chain = SensingChain::create(chainOptions({0.5, 0.5, 0.0}));
   REQUIRE(chain);

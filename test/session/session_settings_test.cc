@@ -210,6 +210,10 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     json meta = json::parse(good);
     meta["schema"] = "crunch.recording/9";
     CHECK(errorOf(meta.dump()).find("schema") != std::string::npos);
-    CHECK(errorOf("{not json").find("not JSON") != std::string::npos);
+    CHECK(errorOf("{not json").find("metadata: parse error at line 1, column 3") !=
+          std::string::npos);
+    // Strict: a key twice is refused, not read as its last value (issue 16).
+    CHECK(errorOf(R"({"schema": "x", "schema": "y"})").find("metadata: schema: the key appears twice") !=
+          std::string::npos);
   }
 }

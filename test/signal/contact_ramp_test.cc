@@ -59,7 +59,7 @@ TEST_CASE("RampFitter: Hall noise leaves the slope within a percent", "[signal]"
   CHECK(f.result().touch_heading == Approx(0.01).margin(2e-4));
 }
 
-TEST_CASE("RampFitter: a translation restarts the ramp; the turn that follows is fitted",
+TEST_CASE("RampFitter: a translation restarts the ramp, the turn that follows is fitted",
           "[signal]") {
   RampFitter f;
   f.reset();

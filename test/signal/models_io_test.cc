@@ -143,7 +143,7 @@ TEST_CASE("Models file: a version-1 file reads with the pipeline it was trained 
              Catch::Contains("pipeline: unknown key"));
 }
 
-TEST_CASE("Models file: the ramp settings and calibration round-trip; version 2 reads nominal",
+TEST_CASE("Models file: the ramp settings and calibration round-trip, version 2 reads nominal",
           "[signal]") {
   SignalModels m = sampleModels();
   m.pipeline.ramp.theta_low = 0.015;

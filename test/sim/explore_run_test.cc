@@ -1,7 +1,7 @@
 // The --sim --explore run (crunch_sim/explore_run.h) on test/scenes/two_tables.json:
 // `--explore grid --teleport` maps exactly what the run without --explore maps (the paper's run
-// is one policy of the new loop), and a driven frontier run moves, whisks, and reports one curve
-// point per whisk.
+// is one policy of the new loop), and a driven frontier run moves, whisks, and scores the map it
+// would end with every curve_step_m metres.
 #include "crunch_sim/explore_run.h"
 
 #include <catch2/catch.hpp>
@@ -45,7 +45,10 @@ TEST_CASE("explore run: grid --teleport maps exactly what the run without --expl
   CHECK(x.whisks == static_cast<int>(scene.poses.size()));
   CHECK(x.stop_reason == "the pose list is done");
   CHECK(x.bumps == 0);
-  CHECK(x.curve.size() == scene.poses.size());
+  // The curve ends on the final map, after the last whisk.
+  REQUIRE_FALSE(x.curve.empty());
+  CHECK(x.curve.back().whisks == x.whisks);
+  CHECK(x.curve.back().recall == tele.value().evaluation.recall);
   // Travel: the straight lines between consecutive poses of the list.
   double travel = 0.0;
   for (std::size_t i = 1; i < scene.poses.size(); ++i) {
@@ -55,7 +58,8 @@ TEST_CASE("explore run: grid --teleport maps exactly what the run without --expl
   CHECK(plain.value().evaluation.recall == tele.value().evaluation.recall);
 }
 
-TEST_CASE("explore run: a driven frontier run moves, whisks, and curves every whisk", "[sim]") {
+TEST_CASE("explore run: a driven frontier run moves, whisks, and scores its map every step",
+          "[sim]") {
   const SimScene scene = twoTables();
   SimRunOptions o;
   o.seed = 1;
@@ -71,13 +75,27 @@ TEST_CASE("explore run: a driven frontier run moves, whisks, and curves every wh
   CHECK(x.travel_m > 0.5);
   CHECK(x.travel_m < 8.0 + 0.05);  // the budget, overshot by at most a control step or so
   CHECK(x.whisks > 3);
-  REQUIRE(x.curve.size() == static_cast<std::size_t>(x.whisks));
+  // A point after the first whisk, then after the first whisk past each further curve_step_m
+  // metres, then the final map at the whole travel.
+  const double step = o.explore->curve_step_m;
+  REQUIRE(x.curve.size() >= 3);
+  CHECK(x.curve.front().whisks == 1);
+  CHECK(x.curve.size() <= static_cast<std::size_t>(x.travel_m / step) + 2);
   for (std::size_t i = 0; i < x.curve.size(); ++i) {
-    CHECK(x.curve[i].whisks == static_cast<int>(i + 1));
-    if (i > 0) CHECK(x.curve[i].travel_m >= x.curve[i - 1].travel_m);
+    if (i > 0) {
+      CHECK(x.curve[i].whisks > x.curve[i - 1].whisks);
+      CHECK(x.curve[i].travel_m >= x.curve[i - 1].travel_m);
+    }
+    if (i > 0 && i + 1 < x.curve.size()) {
+      CHECK(std::floor(x.curve[i].travel_m / step) > std::floor(x.curve[i - 1].travel_m / step));
+    }
     CHECK(x.curve[i].recall >= 0.0);
     CHECK(x.curve[i].recall <= 1.0);
   }
+  CHECK(x.curve.back().whisks == x.whisks);
+  CHECK(x.curve.back().travel_m == x.travel_m);
+  CHECK(x.curve.back().recall == run.value().evaluation.recall);
+  CHECK(x.curve.back().f1 == run.value().evaluation.f1);
   CHECK(x.whisk_poses.size() == static_cast<std::size_t>(x.whisks));
   CHECK(x.path.size() > 10);
   CHECK(x.sim_time_s > x.travel_m / 0.2);  // it cannot outrun the Create's 0.2 m/s

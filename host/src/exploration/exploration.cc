@@ -28,6 +28,9 @@ Status ExploreOptions::validate() const {
   if (!std::isfinite(sample_beta) || sample_beta <= 0) {
     return Error{"exploration sample_beta " + num(sample_beta) + ": must be above 0"};
   }
+  if (!std::isfinite(curve_step_m) || curve_step_m <= 0) {
+    return Error{"exploration curve_step_m " + num(curve_step_m) + ": must be above 0 (metres)"};
+  }
   if (sample_sweeps < 1) {
     return Error{"exploration sample_sweeps " + std::to_string(sample_sweeps) + ": must be 1 or more"};
   }

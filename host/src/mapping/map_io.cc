@@ -1,4 +1,5 @@
 #include "crunch/mapping/map_io.h"
+#include "crunch/core/json_input.h"
 
 #include "core/json_fields.h"
 
@@ -196,6 +197,7 @@ Map parseMapDocument(const Json& doc) {
 }  // namespace
 
 Result<Map> parseMapJson(const std::string& text, const std::string& source) {
+  if (auto st = checkStrictJson(text, source); !st) return st.error();
   Json doc;
   try {
     doc = Json::parse(text);

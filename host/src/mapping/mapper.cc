@@ -52,8 +52,8 @@ std::vector<ChainResult> runChains(Map& map, const MappingOptions& options,
 // (posterior_marginals.h), tables above marginal_keep are kept and, of two overlapping ones, the
 // likelier (eq. 25: two tables cannot share space).
 std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
-                                  const FreeSpaceGrid* free) {
-  std::vector<Rng> streams = globalChainStreams(options.seed, std::max(1, options.global_chains));
+                                  const FreeSpaceGrid* free, uint64_t chain_seed) {
+  std::vector<Rng> streams = globalChainStreams(chain_seed, std::max(1, options.global_chains));
   std::vector<ObjectSample> objects;
   int n_samples = 0;
   for (const ChainResult& r : runChains(map, options, free, streams)) {
@@ -84,16 +84,18 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
   return out;
 }
 
+// `chain_seed`: the seed the chains' streams are split from (globalChainStreams).
 std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
-                                const FreeSpaceGrid* free) {
+                                const FreeSpaceGrid* free, uint64_t chain_seed) {
   // Independent chains from the same evidence. The log joint cannot pick among them: it grows
   // with every wall phantom, so the chain with the most phantoms would win. Instead a table is
   // kept when at least half the chains agree on it (fused_map.h's clustering over chains), or
   // all chains' tables compete in one more, cold chain (ChainFusion).
   const int n_chains = std::max(1, options.global_chains);
-  if (options.chain_fusion == ChainFusion::kMarginal) return marginalMap(map, options, free);
+  if (options.chain_fusion == ChainFusion::kMarginal)
+    return marginalMap(map, options, free, chain_seed);
   // One stream per chain and, last, the pooled chain's.
-  std::vector<Rng> streams = globalChainStreams(options.seed, n_chains + 1);
+  std::vector<Rng> streams = globalChainStreams(chain_seed, n_chains + 1);
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
   // Walls (ModelParams::walled(); none otherwise): each chain's, fused across chains below.
   std::vector<std::vector<WallHyp>> chain_walls;
@@ -286,12 +288,24 @@ Map Mapper::snapshot() const {
 Map Mapper::finish() {
   Map map = std::move(map_);
   map_ = Map{};
+  infer(map, options_.seed);
+  return map;
+}
+
+Map Mapper::inferNow(Rng& rng) const {
+  Map map = map_;
+  infer(map, rng.next());
+  return map;
+}
+
+void Mapper::infer(Map& map, uint64_t chain_seed) const {
   map.stats.poses = pose_count_;
   map.stats.shapelets = static_cast<int>(map.shapelets.size());
   map.stats.proposals = sampler_.stats().proposals;
   if (options_.global_sweeps > 0 && !map.shapelets.empty()) {
     const auto t0 = std::chrono::steady_clock::now();
-    map.tables = globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr);
+    map.tables =
+        globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr, chain_seed);
     map.stats.global_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     map.stats.global_threads =
@@ -301,7 +315,6 @@ Map Mapper::finish() {
   }
   map.stats.wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  return map;
 }
 
 }  // namespace crunch

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "crunch/core/atomic_file.h"
+#include "crunch/core/json_input.h"
 
 namespace crunch {
 
@@ -142,13 +143,7 @@ std::string hex64(uint64_t v) {
   return buf;
 }
 
-Result<std::string> readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot read"};
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+Result<std::string> readFile(const std::string& path) { return readInputFile(path, "file"); }
 
 Status loadScenes(const SweepGridSpec& spec, SweepGrid& g, std::vector<std::string>& texts) {
   const std::vector<std::string> args =
@@ -598,6 +593,7 @@ std::string sweepRowsJson(const std::vector<SweepRow>& rows) {
 }
 
 Result<std::vector<SweepRow>> parseSweepRows(const std::string& text, const std::string& source) {
+  if (auto st = checkStrictJson(text, source); !st) return st.error();
   const Json arr = Json::parse(text, nullptr, false);
   if (arr.is_discarded() || !arr.is_array()) return Error{source + ": not a JSON array"};
   std::vector<SweepRow> rows;

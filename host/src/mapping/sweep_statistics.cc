@@ -1,4 +1,5 @@
 #include "crunch/mapping/sweep_statistics.h"
+#include "crunch/core/json_input.h"
 
 #include <algorithm>
 #include <cmath>
@@ -90,14 +91,11 @@ std::string settingName(const SettingSummary& s) {
 }
 
 Result<std::vector<SettingSummary>> loadSweepSummary(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) return Error{path + ": cannot read (missing? run `crunchhost sweep --out DIR` first)"};
-  Json rows;
-  try {
-    rows = Json::parse(in);
-  } catch (const std::exception& e) {
-    return Error{path + ": not valid JSON (" + std::string(e.what()) + ")"};
-  }
+  auto text = readInputFile(path, "sweep rows (missing? run `crunchhost sweep --out DIR` first)");
+  if (!text) return text.error();
+  auto parsed = parseStrictJson(text.value(), path);
+  if (!parsed) return parsed.error();
+  const Json rows = std::move(parsed.value());
   if (!rows.is_array()) return Error{path + ": not a JSON array of sweep rows"};
   if (rows.empty()) return Error{path + ": has no rows"};
   std::vector<Acc> acc;
@@ -414,12 +412,10 @@ Result<std::vector<ExploreCurve>> parseExploreCurves(const std::string& text,
 }
 
 Result<std::vector<ExploreCurve>> loadExploreCurves(const std::string& path) {
-  std::ifstream in(path);
-  if (!in)
-    return Error{path + ": cannot read (missing? run `crunchhost sweep --explore ... --out DIR`)"};
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  auto curves = parseExploreCurves(ss.str(), path);
+  auto text =
+      readInputFile(path, "curves (missing? run `crunchhost sweep --explore ... --out DIR`)");
+  if (!text) return text.error();
+  auto curves = parseExploreCurves(text.value(), path);
   if (!curves) return curves.error();
   if (curves.value().empty()) return Error{path + ": has no curve point"};
   return curves;

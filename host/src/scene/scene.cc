@@ -1,4 +1,5 @@
 #include "crunch/scene/scene.h"
+#include "crunch/core/json_input.h"
 
 #include "core/json_fields.h"
 
@@ -305,6 +306,7 @@ class FieldPathTracker : public nlohmann::json_sax<json> {
 }  // namespace
 
 Result<Scene> parseScene(const std::string& json_text, const std::string& source) {
+  if (auto st = checkStrictJson(json_text, source); !st) return st.error();
   json doc;
   try {
     doc = json::parse(json_text);
@@ -333,20 +335,9 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& source
 }
 
 Result<Scene> loadScene(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    return Error{path + ": cannot read scene file: is a directory"};
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    return Error{path + ": cannot read scene file: " + std::strerror(errno)};
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) {
-    return Error{path + ": cannot read scene file: " + std::strerror(errno)};
-  }
-  return parseScene(text.str(), path);
+  auto text = readInputFile(path, "scene file");
+  if (!text) return text.error();
+  return parseScene(text.value(), path);
 }
 
 }  // namespace crunch

@@ -8,6 +8,7 @@
 #include "core/json_fields.h"
 #include "crunch/mapping/sensor_model.h"
 #include "crunch/robot/whiskers.h"
+#include "crunch/core/json_input.h"
 
 namespace crunch::session {
 
@@ -144,12 +145,9 @@ std::string recordingMetadata(const RobotSessionOptions& options,
 
 Result<RobotSessionOptions> sessionFromMetadata(const std::string& metadata_json,
                                                 const std::string& source) {
-  json meta;
-  try {
-    meta = json::parse(metadata_json);
-  } catch (const json::exception& e) {
-    return Error{source + ": metadata is not JSON: " + e.what()};
-  }
+  auto parsed = parseStrictJson(metadata_json, source + ": metadata");
+  if (!parsed) return parsed.error();
+  json meta = std::move(parsed.value());
   if (!meta.is_object() || !meta.contains("schema") || meta["schema"] != kRecordingSchema) {
     return Error{source + ": metadata schema is not " + std::string(kRecordingSchema)};
   }

@@ -14,6 +14,7 @@
 
 #include "core/json_fields.h"
 #include "crunch/core/atomic_file.h"  // writeFileAtomic, ensureDirectory
+#include "crunch/core/json_input.h"
 
 namespace crunch::signal {
 
@@ -332,6 +333,7 @@ SignalModels parseDocument(const Json& doc) {
 }  // namespace
 
 Result<SignalModels> parseModelsJson(const std::string& text, const std::string& source) {
+  if (auto st = checkStrictJson(text, source); !st) return st.error();
   Json doc;
   try {
     doc = Json::parse(text);
@@ -353,16 +355,9 @@ Status saveModels(const SignalModels& models, const std::string& path) {
 }
 
 Result<SignalModels> loadModels(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    return Error{path + ": cannot read signal models file: is a directory"};
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Error{path + ": cannot read signal models file: " + std::strerror(errno)};
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) return Error{path + ": cannot read signal models file: " + std::strerror(errno)};
-  return parseModelsJson(text.str(), path);
+  auto text = readInputFile(path, "signal models file");
+  if (!text) return text.error();
+  return parseModelsJson(text.value(), path);
 }
 
 }  // namespace crunch::signal

@@ -33,12 +33,16 @@ struct ExploreOptions {
   // sweeps between draws.
   double sample_beta = 1.0;      // > 0
   int sample_sweeps = 4;         // >= 1
+  // The recall-against-travel curve (with ground truth: --sim) scores the map the run would end
+  // with (Mapper::inferNow: the global inference) after the first whisk, after the first whisk
+  // past every further curve_step_m metres of travel, and at the end (the final map itself).
+  double curve_step_m = 2.0;     // > 0
 
   // okStatus(), or an Error naming the flag: "--travel-budget -1: ...", "--whisk-budget ...".
   Status validate() const;
 };
 
-// One point of the recall-against-travel curve, after a whisk.
+// One point of the recall-against-travel curve: the map the run would end with, after a whisk.
 struct CurvePoint {
   double travel_m = 0.0;
   int whisks = 0;

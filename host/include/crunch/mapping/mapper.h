@@ -56,6 +56,12 @@ class Mapper {
   // maxima over every pose's annealing and, with the global inference, over its chains too
   // (each counted when its annealing ends); snapshot() gives the per-pose maxima so far.
   Map finish();
+  // The map finish() would give if the run ended now, drawn from `rng` instead of the run's own
+  // stream (one draw of it seeds the chains' streams, global_chain.h): the global inference over every shapelet so far (options.global_sweeps > 0), else
+  // the clustering. The run is untouched, so its final map is the same whether or not this is
+  // called (exploration scores its recall-against-travel curve with it: the snapshot's
+  // clustering of per-pose MAPs lags the global inference by many metres).
+  Map inferNow(Rng& rng) const;
 
   // Posterior draws of the whole run's map, for exploration (exploration/policy.h): a chain
   // that persists across calls over every shapelet so far (a blackboard whose working memory
@@ -72,6 +78,10 @@ class Mapper {
   const std::vector<WhiskerMount>& mounts() const { return mounts_; }
 
  private:
+  // finish()'s inference on `map` (the run's collation), its chains' streams split from
+  // `chain_seed` (finish: options.seed; inferNow: a draw of its rng); sets map.tables and stats.
+  void infer(Map& map, uint64_t chain_seed) const;
+
   std::vector<WhiskerMount> mounts_;
   MappingOptions options_;
   std::chrono::steady_clock::time_point start_;
