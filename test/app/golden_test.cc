@@ -95,9 +95,9 @@ TEST_CASE("Golden: --sim maps the test scenes exactly as before the restructurin
 TEST_CASE("Golden: --threads 1, 2 and 3 give the same map.json", "[golden]") {
   // The global inference's chains run in parallel, each on its own stream, combined in chain
   // order (mapping/global_chain.h): the thread count must not change one bit of the map. The
-  // default arena under the vote, and a walled two-table room under the posterior marginals.
+  // default arena under the vote, and under the walls model with the posterior marginals.
   const std::string args = GENERATE(as<std::string>{}, "",
-                                    " --scene test/scenes/two_tables.json --model walls"
+                                    " --model walls"
                                     " --chain-fusion marginal --seed 4");
   INFO("args:" << args);
   json first;
