@@ -167,6 +167,10 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
   app.add_option("--global-chains", opt.mapping.global_chains,
                  "independent chains of the global inference; a table needs half to agree")
       ->capture_default_str();
+  app.add_option("--threads", opt.mapping.threads,
+                 "threads the global inference's chains run on (0: one per core); the map is "
+                 "the same for every count")
+      ->capture_default_str();
 }
 
 // `crunchhost train`: the paper's training protocols in the simulator (docs/TRAINING.md).
@@ -263,6 +267,7 @@ int runTopLevel(TopLevel& t, RobotOptions& ropt) {
     rp.recording = t.replay;
     rp.out_dir = opt.out_dir;
     rp.json_progress = opt.json_progress;
+    rp.threads = opt.mapping.threads;  // the machine's, not the recording's
     return runReplay(rp, std::cout, std::cerr);
   }
   if (t.robot) {

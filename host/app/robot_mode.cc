@@ -290,7 +290,7 @@ int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: --replay: --out " << s.error().message << "\n";
     return 2;
   }
-  auto replayed = session::replayRecording(opt.recording);
+  auto replayed = session::replayRecording(opt.recording, opt.threads);
   if (!replayed) {  // the header or the settings: nothing written
     err << "crunchhost: --replay: " << replayed.error().message << "\n";
     return 2;

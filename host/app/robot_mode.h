@@ -63,6 +63,7 @@ struct ReplayOptions {
   std::string recording;
   std::string out_dir = "out";
   bool json_progress = false;
+  int threads = 0;  // --threads: MappingOptions::threads (not in the recording: a machine's)
 };
 
 int runRobot(const RobotOptions& options, std::ostream& out, std::ostream& err);

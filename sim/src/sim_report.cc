@@ -59,6 +59,7 @@ std::string simReportJson(const Scene& scene, const SimRun& run, const SimRunOpt
   j["accuracy"] = evaluationJson(run.evaluation, matchToleranceFor(run.model));
   j["counts"] = mapCountsJson(run.map);
   j["timings_s"] = {{"sense_and_infer", run.map.stats.wall_s}, {"total", total_s}};
+  j["global_inference"] = globalInferenceJson(run.map.stats);
   if (run.physics) j["physics"] = physicsJson(*run.physics);
   if (run.exploration) j["exploration"] = exploration::explorationJson(*run.exploration);
   j["model"] = modelJson(run.model);

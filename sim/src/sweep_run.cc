@@ -10,6 +10,7 @@
 #include <string>
 #include <thread>
 
+#include "crunch/core/parallel.h"
 #include "crunch_sim/sim_run.h"
 
 namespace crunch::sim {
@@ -36,7 +37,7 @@ std::vector<SweepCurvePoint> sweepCurve(const exploration::ExplorationReport& re
 }
 
 SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_t index,
-                  const SweepShard& shard) {
+                  const SweepShard& shard, int threads) {
   const auto t0 = std::chrono::steady_clock::now();
   const SweepPoint p = g.pointAt(index);
   SimRunOptions o;
@@ -44,6 +45,7 @@ SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_
   o.noise = g.noises[p.noise];
   o.seed = p.seed;
   o.mapping = g.mappingOptions(p);
+  o.mapping.threads = threads;  // never changes the row (global_chain.h)
   // The grid's fusion as given (vote unless --chain-fusion): the gaussian sensor's default.
   o.chain_fusion_given = true;
   o.world_mutex = &g_world_mutex;
@@ -95,8 +97,10 @@ Result<SweepRunResult> runSweepPoints(const SweepGrid& g, const SweepShard& shar
   std::vector<size_t> indices;
   for (size_t i = 0; i < g.size(); ++i)
     if (shard.holds(i)) indices.push_back(i);
-  if (jobs == 0) jobs = static_cast<int>(std::thread::hardware_concurrency());
-  jobs = std::max(1, std::min<int>(jobs, static_cast<int>(std::max<size_t>(1, indices.size()))));
+  jobs = std::max(1, std::min<int>(resolveThreads(jobs),
+                                    static_cast<int>(std::max<size_t>(1, indices.size()))));
+  // The cores the jobs leave idle go to each run's global chains.
+  const int run_threads = std::max(1, hardwareThreads() / jobs);
 
   SweepRunResult result;
   result.jobs = jobs;
@@ -112,7 +116,7 @@ Result<SweepRunResult> runSweepPoints(const SweepGrid& g, const SweepShard& shar
       SweepRow row;
       std::string what;
       try {
-        row = runPoint(g, scenes, indices[k], shard);
+        row = runPoint(g, scenes, indices[k], shard, run_threads);
       } catch (const std::exception& e) {
         what = e.what();
       }

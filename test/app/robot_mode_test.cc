@@ -54,6 +54,19 @@ TEST_CASE("Robot mode: --replay: working_memory 0 in the recording's metadata is
   CHECK_FALSE(std::filesystem::exists(dir.file("out")));
 }
 
+TEST_CASE("Robot mode: --replay --threads out of range is exit 2 naming it, nothing written",
+          "[app]") {
+  TempDir dir;
+  app::ReplayOptions o;
+  o.recording = recordingWithWorkingMemory(dir, 7);  // good metadata: the flag is what fails
+  o.out_dir = dir.file("out");
+  o.threads = 257;
+  std::ostringstream out, err;
+  CHECK(app::runReplay(o, out, err) == 2);
+  CHECK(err.str().find("threads") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir.file("out")));
+}
+
 TEST_CASE("Robot mode: --replay: a working_memory that is not a number is exit 2 naming it",
           "[app]") {
   TempDir dir;
@@ -87,6 +100,10 @@ TEST_CASE(
   SECTION("a NaN start heading") {
     o.start_theta = std::nan("");
     field = "start.theta";
+  }
+  SECTION("a negative thread count") {
+    o.mapping.threads = -1;
+    field = "threads";
   }
   SECTION("map every 0 s") {
     o.map_every_s = 0.0;

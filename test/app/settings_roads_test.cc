@@ -59,6 +59,8 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
                           Case{"--global-chains 0", "global_chains"},
                           Case{"--global-chains -2", "global_chains"},
                           Case{"--global-sweeps -1", "global_sweeps"},
+                          Case{"--threads -1", "threads"},
+                          Case{"--threads 257", "threads"},
                           Case{"--min-support 0", "min_support"},
                           Case{"--smart-gain nan", "smart_parent_gain"},
                           Case{"--smart-gain -100", "smart_parent_gain"},

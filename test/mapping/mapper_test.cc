@@ -367,6 +367,65 @@ TEST_CASE("Mapper: peak_live_tables and peak_live_legs track the largest anneale
   }
 }
 
+TEST_CASE("Mapper: the global inference gives the same map on 1, 2 and 3 threads",
+          "[mapping][mapper]") {
+  // Each chain draws from its own stream and the chains are combined in chain order
+  // (global_chain.h), so the thread count changes nothing: tables, scores, walls, counts.
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  const ChainFusion fusion =
+      GENERATE(ChainFusion::kVote, ChainFusion::kPool, ChainFusion::kMarginal);
+  const ObjectModel model = GENERATE(ObjectModel::kPaper, ObjectModel::kWalls, ObjectModel::kRooms);
+  INFO("fusion " << chainFusionName(fusion) << ", model " << objectModelName(model));
+  auto run = [&](int threads) {
+    MappingOptions o = options(3, 4);
+    o.global_chains = 5;  // more chains than threads, and not a multiple of 2 or 3
+    o.chain_fusion = fusion;
+    o.model.objects = model;
+    o.threads = threads;
+    Mapper m(mounts, lo, hi, o);
+    for (std::size_t t = 0; t < script.poses.size(); ++t)
+      m.addPose(script.poses[t], script.reports[t], script.rays[t]);
+    const long long per_pose = m.snapshot().stats.proposals;
+    Map map = m.finish();
+    CHECK(map.stats.proposals > per_pose);  // the chains ran
+    return map;
+  };
+  const Map one = run(1);
+  CHECK(one.stats.global_threads == 1);
+  CHECK(one.stats.global_s > 0.0);
+  // requireSameMap compares the proposals too: their count depends on every draw of every
+  // chain, so a chain that drew from another's stream, or ran twice, would show.
+  for (const int threads : {2, 3}) {
+    INFO("threads " << threads);
+    const Map many = run(threads);
+    CHECK(many.stats.global_threads == threads);
+    requireSameMap(many, one);
+    CHECK(many.stats.peak_live_tables == one.stats.peak_live_tables);
+    CHECK(many.stats.peak_live_legs == one.stats.peak_live_legs);
+    REQUIRE(many.walls.size() == one.walls.size());
+    for (std::size_t i = 0; i < one.walls.size(); ++i) {
+      CHECK(many.walls[i].a == one.walls[i].a);
+      CHECK(many.walls[i].b == one.walls[i].b);
+      CHECK(many.walls[i].score == one.walls[i].score);
+    }
+  }
+}
+
+TEST_CASE("Mapper: threads is validated, 0 meaning one per core", "[mapping][mapper]") {
+  MappingOptions o;
+  CHECK(o.threads == 0);
+  CHECK(o.validate());
+  o.threads = 256;
+  CHECK(o.validate());
+  for (const int bad : {-1, 257}) {
+    o.threads = bad;
+    REQUIRE_FALSE(o.validate());
+    CHECK(o.validate().error().message.find("threads") != std::string::npos);
+  }
+}
+
 TEST_CASE("Mapper: a run without shapelets has no live hypotheses", "[mapping][mapper]") {
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
   Mapper mapper(mounts, {-1, -1}, {3, 3}, options(1, 4));
@@ -388,9 +447,20 @@ TEST_CASE("Mapper: pooled chains keep the scripted table, pool_steps is validate
     o.chain_fusion = ChainFusion::kPool;
     ScriptSensor sensor(script);
     const Map map = runMapping(sensor, script.poses, 0, o).value();
-    REQUIRE(map.tables.size() == 1);
+    for (const MapTable& t : map.tables)
+      UNSCOPED_INFO("table " << t.pose.x << " " << t.pose.y << " " << t.pose.theta);
+    // Loosened in issue 15 from "exactly one table": with the chains' own streams, seed 3's
+    // pooled chain also keeps a table one width (0.8 m) along the scripted one's axis, its
+    // corners at the scripted table's two left legs: the adjacent-placement ambiguity
+    // (RESULTS.md, adjacent tables), which these 12 shapelets cannot rule out. The scripted
+    // table must be kept, first (the better supported), and nothing may overlap it (eq. 25).
+    REQUIRE(!map.tables.empty());
+    REQUIRE(map.tables.size() <= 2);
     CHECK(std::hypot(map.tables[0].pose.x - truth.x, map.tables[0].pose.y - truth.y) < 0.05);
     CHECK(std::abs(wrapPeriod(map.tables[0].pose.theta - truth.theta, kPi)) < 5.0 * kPi / 180.0);
+    for (std::size_t i = 1; i < map.tables.size(); ++i)
+      CHECK_FALSE(overlaps({map.tables[0].pose, map.tables[0].width, map.tables[0].depth},
+                           {map.tables[i].pose, map.tables[i].width, map.tables[i].depth}));
     // The pooled chain ran too: more proposals than the vote's chains alone.
     MappingOptions v = o;
     v.chain_fusion = ChainFusion::kVote;

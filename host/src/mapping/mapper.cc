@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <utility>
 
+#include "crunch/core/parallel.h"
+#include "crunch/mapping/global_chain.h"
 #include "crunch/mapping/posterior_marginals.h"
 #include "crunch/mapping/wall_fusion.h"
 
@@ -10,22 +12,11 @@ namespace crunch {
 
 namespace {
 
-// The fused map as one inference over every shapelet of the run (the paper's future work of
-// "longer-term memories of shapelets", §4): a blackboard whose working memory holds them all,
-// annealed with the same schedule and `global_sweeps` sweeps per temperature. The spatial hash
-// keeps each move local, so the cost grows with the number of shapelets, not its square.
-// Puts every shapelet of the run and the negative evidence on `board` (the global inference's
-// working memory holds them all).
+// Puts every shapelet of the run and the negative evidence on `board` (the pooled chain's working
+// memory holds them all, as each global chain's does).
 void holdWholeRun(Blackboard& board, const Map& map, const FreeSpaceGrid* free) {
   for (const Shapelet& s : map.shapelets) board.pushShapelet(s);
   board.setFreeSpace(free);
-}
-
-// The sampler's options with the global inference's sweeps per temperature.
-SamplerOptions globalSampler(const MappingOptions& options) {
-  SamplerOptions so = options.sampler;
-  so.sweeps_per_temperature = options.global_sweeps;
-  return so;
 }
 
 // Per-pose MAPs that agree with each fused table.
@@ -35,36 +26,42 @@ void countSupport(std::vector<MapTable>& tables, const Map& map, const FuseOptio
       for (const MapTable& q : pm.tables) t.support += tablesAgree(q.pose, t.pose, fuse);
 }
 
+// The global inference's chains (global_chain.h), each annealed once, on options.threads threads:
+// chain c on its own stream, its result in slot c. Each chain is built inside its task, so at
+// most `threads` blackboards over the whole run exist at once. The run's counts take every
+// chain's, in chain order.
+std::vector<ChainResult> runChains(Map& map, const MappingOptions& options,
+                                   const FreeSpaceGrid* free, std::vector<Rng>& streams) {
+  const int n_chains = std::max(1, options.global_chains);
+  std::vector<ChainResult> results(static_cast<size_t>(n_chains));
+  parallelFor(n_chains, resolveThreads(options.threads), [&](int c) {
+    GlobalChain chain(map.shapelets, free, options, streams[static_cast<size_t>(c)]);
+    chain.anneal();
+    results[static_cast<size_t>(c)] = chain.result();
+  });
+  for (const ChainResult& r : results) {
+    map.stats.proposals += r.proposals;
+    map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, r.live_tables);
+    map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, r.live_legs);
+  }
+  return results;
+}
+
 // ChainFusion::kMarginal: the chains' states after each sweep of their coldest marginal_steps
 // temperatures are samples; a table's score is the fraction of samples holding it
 // (posterior_marginals.h), tables above marginal_keep are kept and, of two overlapping ones, the
 // likelier (eq. 25: two tables cannot share space).
 std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
-                                  const FreeSpaceGrid* free, Rng& rng) {
-  const int n_chains = std::max(1, options.global_chains);
+                                  const FreeSpaceGrid* free, uint64_t chain_seed) {
+  std::vector<Rng> streams = globalChainStreams(chain_seed, std::max(1, options.global_chains));
   std::vector<ObjectSample> objects;
   int n_samples = 0;
-  SamplerOptions so = globalSampler(options);
-  const int first = so.schedule_steps - options.marginal_steps;
-  so.after_sweep = [&](int step, int, double, const Blackboard& board) {
-    if (step < first) return;
-    for (int32_t id = 0; id < board.tableExtent(); ++id) {
-      const TableHyp& t = board.table(id);
-      if (!t.alive) continue;
-      const MapTable m = modelTable(t.pose, options.model);
-      objects.push_back({n_samples, t.pose, {m.width, m.depth, m.leg}});
+  for (const ChainResult& r : runChains(map, options, free, streams)) {
+    for (ObjectSample o : r.samples) {
+      o.sample += n_samples;  // numbered over the chains in chain order
+      objects.push_back(o);
     }
-    ++n_samples;
-  };
-  for (int c = 0; c < n_chains; ++c) {
-    Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
-                     4 * map.shapelets.size() + 64);
-    holdWholeRun(board, map, free);
-    Sampler sampler(board, so, rng);
-    sampler.anneal();
-    map.stats.proposals += sampler.stats().proposals;
-    map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, board.liveTables());
-    map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, board.liveLegs());
+    n_samples += r.sample_count;
   }
   MarginalOptions mo;
   mo.radius = options.fuse.radius;
@@ -87,43 +84,31 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
   return out;
 }
 
+// `chain_seed`: the seed the chains' streams are split from (globalChainStreams).
 std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
-                                const FreeSpaceGrid* free, Rng& rng) {
+                                const FreeSpaceGrid* free, uint64_t chain_seed) {
   // Independent chains from the same evidence. The log joint cannot pick among them: it grows
   // with every wall phantom, so the chain with the most phantoms would win. Instead a table is
   // kept when at least half the chains agree on it (fused_map.h's clustering over chains), or
   // all chains' tables compete in one more, cold chain (ChainFusion).
   const int n_chains = std::max(1, options.global_chains);
-  if (options.chain_fusion == ChainFusion::kMarginal) return marginalMap(map, options, free, rng);
+  if (options.chain_fusion == ChainFusion::kMarginal)
+    return marginalMap(map, options, free, chain_seed);
+  // One stream per chain and, last, the pooled chain's.
+  std::vector<Rng> streams = globalChainStreams(chain_seed, n_chains + 1);
   std::vector<PoseMap> chains(static_cast<size_t>(n_chains));
-  std::vector<Pose2> found;
-  std::vector<TableHyp> sized_found;
   // Walls (ModelParams::walled(); none otherwise): each chain's, fused across chains below.
   std::vector<std::vector<WallHyp>> chain_walls;
-  for (PoseMap& chain : chains) {
-    Blackboard board(options.model, static_cast<int>(map.shapelets.size()),
-                     4 * map.shapelets.size() + 64);
-    holdWholeRun(board, map, free);
-    Sampler sampler(board, globalSampler(options), rng);
-    sampler.anneal();
-    map.stats.proposals += sampler.stats().proposals;
-    map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, board.liveTables());
-    map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, board.liveLegs());
-    if (options.model.sized()) {
-      mapTablesOf(sampler, options.model, chain.tables, sized_found);
-    } else {
-      sampler.mapTables(found);
-      for (const Pose2& p : found) chain.tables.push_back(modelTable(p, options.model));
-    }
-    if (options.model.walled()) {
-      chain_walls.emplace_back();
-      sampler.mapWalls(chain_walls.back());
-    }
+  std::vector<ChainResult> results = runChains(map, options, free, streams);
+  for (size_t c = 0; c < results.size(); ++c) {
+    chains[c].tables = std::move(results[c].tables);
+    if (options.model.walled()) chain_walls.push_back(std::move(results[c].walls));
   }
   map.walls = fuseWalls(chain_walls);
   FuseOptions agree = options.fuse;
   agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;
+  std::vector<TableHyp> sized_found;
   std::vector<MapTable> kept = fuseTables(chains, agree);  // with sizes (the rooms model)
   for (const MapTable& t : kept) poses.push_back(t.pose);
   if (options.chain_fusion == ChainFusion::kPool) {
@@ -145,9 +130,9 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
         else board.addLeg({at.x(), at.y(), wrapPeriod(p.theta, kPi / 2)}, id);
       }
     }
-    SamplerOptions so = globalSampler(options);
+    SamplerOptions so = globalSamplerOptions(options);
     so.schedule_steps = options.pool_steps;  // beta_i for i < pool_steps: the coldest
-    Sampler sampler(board, so, rng);
+    Sampler sampler(board, so, streams.back());
     sampler.anneal();
     map.stats.proposals += sampler.stats().proposals;
     sampler.mapTables(poses);
@@ -303,23 +288,28 @@ Map Mapper::snapshot() const {
 Map Mapper::finish() {
   Map map = std::move(map_);
   map_ = Map{};
-  infer(map, rng_);
+  infer(map, options_.seed);
   return map;
 }
 
 Map Mapper::inferNow(Rng& rng) const {
   Map map = map_;
-  infer(map, rng);
+  infer(map, rng.next());
   return map;
 }
 
-void Mapper::infer(Map& map, Rng& rng) const {
+void Mapper::infer(Map& map, uint64_t chain_seed) const {
   map.stats.poses = pose_count_;
   map.stats.shapelets = static_cast<int>(map.shapelets.size());
   map.stats.proposals = sampler_.stats().proposals;
   if (options_.global_sweeps > 0 && !map.shapelets.empty()) {
+    const auto t0 = std::chrono::steady_clock::now();
     map.tables =
-        globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr, rng);
+        globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr, chain_seed);
+    map.stats.global_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    map.stats.global_threads =
+        std::min(resolveThreads(options_.threads), std::max(1, options_.global_chains));
   } else {
     map.tables = fuseTables(map.per_pose, options_.fuse);
   }

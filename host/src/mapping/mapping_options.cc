@@ -13,6 +13,7 @@ Status MappingOptions::validate() const {
                            checkCount("working_memory", working_memory, 1, 1000),
                            checkCount("global_sweeps", global_sweeps, 0, 1000),
                            checkCount("global_chains", global_chains, 1, 256),
+                           checkCount("threads", threads, 0, 256),
                            checkCount("pool_steps", pool_steps, 1,
                                       std::max(1, sampler.schedule_steps)),
                            checkCount("marginal_steps", marginal_steps, 1,

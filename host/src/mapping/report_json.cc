@@ -60,6 +60,10 @@ nlohmann::ordered_json mapCountsJson(const Map& map) {
           {"peak_live_legs", map.stats.peak_live_legs}};
 }
 
+nlohmann::ordered_json globalInferenceJson(const MapStats& stats) {
+  return {{"wall_s", stats.global_s}, {"threads", stats.global_threads}};
+}
+
 nlohmann::ordered_json modelJson(const ModelParams& model) {
   return {{"objects", objectModelName(model.objects)},
           {"sigma_r_shapelet", model.sigma_r_shapelet},

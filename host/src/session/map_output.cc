@@ -5,6 +5,7 @@
 
 #include "crunch/core/atomic_file.h"
 #include "crunch/mapping/map_io.h"
+#include "crunch/mapping/report_json.h"
 #include "crunch/render/map_render.h"
 #include "crunch/scene/scene.h"
 
@@ -81,6 +82,7 @@ std::string sessionReportJson(const RobotSession& session, const Map& map) {
                          {"flat", e.flat}}},
                        {"final_pose", {p.x, p.y, p.theta}},
                        {"map", {{"tables", map.tables.size()}, {"shapelets", map.stats.shapelets}}},
+                       {"global_inference", json::parse(globalInferenceJson(map.stats).dump())},
                        {"shapelets", shapelets}};
   return report.dump();
 }

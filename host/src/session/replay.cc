@@ -7,12 +7,13 @@
 
 namespace crunch::session {
 
-Result<Replay> replayRecording(const std::string& path) {
+Result<Replay> replayRecording(const std::string& path, int threads) {
   auto reader = io::RecordingReader::open(path);
   if (!reader) return reader.error();
   io::RecordingReader& rec = *reader.value();
   auto options = sessionFromMetadata(rec.metadata(), "recording " + path);
   if (!options) return options.error();
+  options.value().mapping.threads = threads;
   auto created = RobotSession::create(options.value());
   if (!created) return created.error();
   Replay r;

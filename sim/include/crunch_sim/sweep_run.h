@@ -11,7 +11,9 @@
 // run) and shard differ.
 //
 // Threads: `jobs` workers (0: one per core; never more than the points) take the shard's points
-// in grid order. Each scene's World is built once and shared; the ODE collision scratch of this
+// in grid order. Each run's global chains get the cores the workers leave (MappingOptions::threads
+// = max(1, cores / workers): 1 when the points fill the cores, all of them for a single point);
+// that never changes a row. Each scene's World is built once and shared; the ODE collision scratch of this
 // build is global (world.h), so every World query holds one mutex; inference, the bulk of a run,
 // runs in parallel. `progress` is called under a lock after every point with (done, total).
 #pragma once

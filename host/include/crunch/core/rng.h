@@ -3,15 +3,20 @@
 // implementation-defined, so a seed gives the same run with any standard library.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 
 namespace crunch {
 
 // xoshiro256** seeded with splitmix64. Not thread-safe: one instance per thread of work.
+// Parallel work that must not depend on the thread count draws from streams split by jump():
+// one Rng per piece of work, each jumped once more than the last (Mapper's global chains).
 class Rng {
  public:
   explicit Rng(uint64_t seed) { reseed(seed); }
+  // The generator in exactly this state (tests against published vectors); not all zero.
+  explicit Rng(const std::array<uint64_t, 4>& state) : s_{state[0], state[1], state[2], state[3]} {}
 
   void reseed(uint64_t seed) {
     for (auto& s : s_) {
@@ -59,6 +64,27 @@ class Rng {
     return u * m;
   }
   double normal(double mean, double sigma) { return mean + sigma * normal(); }
+
+  // Advances the state by 2^128 draws (the authors' jump polynomial for xoshiro256, Blackman &
+  // Vigna 2018): the streams of a generator jumped 0, 1, 2, ... times never overlap for 2^128
+  // draws, so each is a piece of work's own. Forgets a spare normal draw.
+  void jump() {
+    constexpr uint64_t kJump[] = {0x180ec6d33cfd0abaull, 0xd5a61266f0c9392cull,
+                                  0xa9582618e03fc9aaull, 0x39abdc4529b1661cull};
+    uint64_t t[4] = {0, 0, 0, 0};
+    for (const uint64_t word : kJump) {
+      for (int b = 0; b < 64; ++b) {
+        if (word & (uint64_t{1} << b)) {
+          for (int i = 0; i < 4; ++i) t[i] ^= s_[i];
+        }
+        next();
+      }
+    }
+    for (int i = 0; i < 4; ++i) s_[i] = t[i];
+    has_spare_ = false;
+  }
+
+  std::array<uint64_t, 4> state() const { return {s_[0], s_[1], s_[2], s_[3]}; }
 
  private:
   static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }

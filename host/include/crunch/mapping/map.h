@@ -47,6 +47,10 @@ struct MapStats {
   // global_sweeps > 0), over each of its chains too. 0 for a run that never annealed.
   int peak_live_tables = 0;
   int peak_live_legs = 0;
+  // The global inference (Mapper::finish): its wall time, part of wall_s, and the threads its
+  // chains ran on (0: none ran). Measured, machine-dependent: in report.json, not in map.json.
+  double global_s = 0.0;
+  int global_threads = 0;
 };
 
 // One draw of the map from a sampler's chain (Mapper::drawSamples): its live tables (each of

@@ -5,13 +5,15 @@
 // recorded; at the end the collation is fused into one map (fused_map.h), by one global
 // inference over every shapelet when MappingOptions::global_sweeps > 0.
 //
-// Randomness: the sampler draws from its own stream seeded by options.seed, so the map depends
-// only on the reports, their order and the seed. snapshot() draws nothing (it clusters the
-// per-pose MAPs), so a run that writes maps as it goes ends with the same map as one that
-// does not.
+// Randomness: the per-pose sampler draws from its own stream seeded by options.seed, and each of
+// the global inference's chains from a stream of its own split from the seed (global_chain.h),
+// so the map depends only on the reports, their order, the seed and the chain count: not on
+// options.threads. snapshot() draws nothing (it clusters the per-pose MAPs), so a run that
+// writes maps as it goes ends with the same map as one that does not.
 //
 // Ownership: owns the blackboard, sampler and free-space grid. Not copyable or movable (the
-// sampler references the blackboard). Thread-safety: none.
+// sampler references the blackboard). Thread-safety: none (one thread calls it); finish() runs
+// the global chains on options.threads threads of its own, joined before it returns.
 #pragma once
 
 #include <memory>
@@ -48,13 +50,14 @@ class Mapper {
 
   // The map so far: per-pose MAPs, shapelets, and tables fused by clustering (no random draws).
   Map snapshot() const;
-  // The final map: the global inference (options.global_sweeps > 0) or the clustering; stats
-  // include wall_s since construction. Call once, last. stats.peak_live_tables/_legs are the
+  // The final map: the global inference (options.global_sweeps > 0; its chains in parallel on
+  // options.threads threads) or the clustering; stats include wall_s since construction and
+  // global_s. Call once, last. stats.peak_live_tables/_legs are the
   // maxima over every pose's annealing and, with the global inference, over its chains too
   // (each counted when its annealing ends); snapshot() gives the per-pose maxima so far.
   Map finish();
   // The map finish() would give if the run ended now, drawn from `rng` instead of the run's own
-  // stream: the global inference over every shapelet so far (options.global_sweeps > 0), else
+  // stream (one draw of it seeds the chains' streams, global_chain.h): the global inference over every shapelet so far (options.global_sweeps > 0), else
   // the clustering. The run is untouched, so its final map is the same whether or not this is
   // called (exploration scores its recall-against-travel curve with it: the snapshot's
   // clustering of per-pose MAPs lags the global inference by many metres).
@@ -75,8 +78,9 @@ class Mapper {
   const std::vector<WhiskerMount>& mounts() const { return mounts_; }
 
  private:
-  // finish()'s inference on `map` (the run's collation) with `rng`; sets map.tables and stats.
-  void infer(Map& map, Rng& rng) const;
+  // finish()'s inference on `map` (the run's collation), its chains' streams split from
+  // `chain_seed` (finish: options.seed; inferNow: a draw of its rng); sets map.tables and stats.
+  void infer(Map& map, uint64_t chain_seed) const;
 
   std::vector<WhiskerMount> mounts_;
   MappingOptions options_;

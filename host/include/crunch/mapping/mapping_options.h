@@ -49,6 +49,11 @@ struct MappingOptions {
   // temperature (global inference); 0: clustering of the per-pose MAPs (fused_map.h).
   int global_sweeps = 8;
   int global_chains = 8;  // independent chains
+  // Threads the global inference's chains run on (`--threads`; 0: one per core,
+  // core/parallel.h hardwareThreads()). Never changes a result: each chain draws from its own
+  // stream and the chains are combined in chain order (global_chain.h). A property of the
+  // machine, not of the run: not in a recording's metadata nor in report.json's settings.
+  int threads = 0;
   ChainFusion chain_fusion = ChainFusion::kVote;
   int pool_steps = 4;  // kPool: the coldest temperatures of the schedule the pooled chain runs
   // kMarginal: the coldest temperatures of each chain's schedule whose sweeps are samples.
@@ -60,6 +65,8 @@ struct MappingOptions {
   bool negative_evidence = true;
   // Called after each pose with (poses done, poses total); may be empty.
   std::function<void(int, int)> progress;
+  // sampler.after_temperature and sampler.after_sweep are called by the per-pose annealings
+  // only, never by the global inference's chains (which may run on several threads).
   // Blackboard snapshots (`crunchhost --sim --snapshot K`, paper Figs. 3-4): called by
   // Mapper::addPose after every pose, with the pose's index in the run's order (0-based), the
   // pose, whether it annealed (false: no new shapelet, the blackboard is as the last annealing
@@ -69,8 +76,9 @@ struct MappingOptions {
 
   // Every setting of the run: model.validate(), sampler.validate(), fuse.validate() (their
   // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
-  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256, pool_steps and marginal_steps 1..sampler.schedule_steps,
-  // marginal_keep in [0, 1).
+  // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256,
+  // threads 0..256, pool_steps and marginal_steps 1..sampler.schedule_steps, marginal_keep in
+  // [0, 1).
   // okStatus(), or an Error naming the first bad field. runMapping and session::RobotSession
   // call it; a Mapper must be given valid options.
   Status validate() const;

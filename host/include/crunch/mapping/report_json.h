@@ -25,6 +25,11 @@ nlohmann::ordered_json evaluationJson(const Evaluation& ev, const MatchTolerance
 // peak_live_tables, peak_live_legs.
 nlohmann::ordered_json mapCountsJson(const Map& map);
 
+// The global inference's wall time and threads: {"wall_s", "threads"} (MapStats::global_s,
+// global_threads; 0 and 0 without one). Measured: differs from machine to machine and run to
+// run, never part of a result.
+nlohmann::ordered_json globalInferenceJson(const MapStats& stats);
+
 // sigma_r_shapelet, sigma_theta_shapelet, sigma_r_leg, sigma_theta_leg (eq. 12).
 nlohmann::ordered_json modelJson(const ModelParams& model);
 

@@ -37,8 +37,8 @@ Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out
                      const exploration::ExplorationReport* exploration = nullptr);
 
 // The report's session part as JSON text (an object): every counter of the data path ("bridge",
-// "samples", "create", "contacts"), "final_pose", "map" (tables, shapelets) and "shapelets"
-// (x, y, phi, whisker, pose, from). The caller adds its own keys (mode, stop reason, devices).
+// "samples", "create", "contacts"), "final_pose", "map" (tables, shapelets), "global_inference"
+// (wall_s, threads: report_json.h) and "shapelets" (x, y, phi, whisker, pose, from). The caller adds its own keys (mode, stop reason, devices).
 std::string sessionReportJson(const RobotSession& session, const Map& map);
 
 class MapWriter {

@@ -26,8 +26,11 @@ struct Replay {
   std::string damage;                     // empty: the file ended cleanly
 };
 
+// `threads`: MappingOptions::threads of the replay (the metadata does not hold it: it is the
+// replaying machine's and never changes the map); validated with the session's options.
 // Errors (nothing replayed): the file cannot be opened or is not a recording (its header),
-// its metadata (sessionFromMetadata: the field named), a session that cannot be made from it.
-Result<Replay> replayRecording(const std::string& path);
+// its metadata (sessionFromMetadata: the field named), a session that cannot be made from it
+// (e.g. "mapping: threads: ...").
+Result<Replay> replayRecording(const std::string& path, int threads = 0);
 
 }  // namespace crunch::session

@@ -16,7 +16,8 @@
 //
 // "crunchhost", "usb", "create" and "models_path" say where the run came from and are not read
 // back. Everything else is what the session's result depends on; the rest of RobotSessionOptions
-// follows from the models (sessionOptions()).
+// follows from the models (sessionOptions()). MappingOptions::threads is not written: it never
+// changes the map, and a replay runs on its own machine's cores (replay.h takes it).
 //
 // Reading is strict (ARCHITECTURE.md §3 "One road in"): every settings field required, unknown
 // settings refused (a setting this reader does not know could change the map), numbers finite
