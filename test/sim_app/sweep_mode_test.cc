@@ -127,18 +127,20 @@ TEST_CASE("sweep: one row per grid point in grid order, deterministic per seed",
 }
 
 TEST_CASE("sweep: a row measures what crunchhost --sim reports for the same point", "[app][sweep]") {
-  // The default arena (six tables, where the map is not empty) at a short schedule.
+  // The default arena (six tables, where the map is not empty) at a short schedule. Realistic
+  // noise: at noisy with 4 temperatures the fused map is empty on seeds 2 and 3 since the global
+  // chains have their own streams (issue 15), and an empty map would make the comparison vacuous.
   TempDir sw, sim;
   app::SweepOptions o;
   o.grid.scenes = {"default"};
-  o.grid.noise = "noisy";
+  o.grid.noise = "realistic";
   o.grid.schedule_steps = "4";
   o.grid.seed_list = "2";
   o.out_dir = sw.path().string();
   REQUIRE(sweep(o).code == 0);
   const Json row = rows(sw.path().string()).at(0);
   app::SimOptions so;
-  so.noise = "noisy";
+  so.noise = "realistic";
   so.seed = 2;
   so.mapping.sampler.schedule_steps = 4;
   so.out_dir = sim.path().string();
