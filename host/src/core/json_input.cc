@@ -29,69 +29,6 @@ std::string placeOf(std::string_view text, std::size_t offset) {
   return out;
 }
 
-// A SAX pass that records the first key an object holds twice, with the member's path.
-class DuplicateKeys final : public nlohmann::json_sax<nlohmann::json> {
- public:
-  bool null() override { return value(); }
-  bool boolean(bool) override { return value(); }
-  bool number_integer(number_integer_t) override { return value(); }
-  bool number_unsigned(number_unsigned_t) override { return value(); }
-  bool number_float(number_float_t, const string_t&) override { return value(); }
-  bool string(string_t&) override { return value(); }
-  bool binary(binary_t&) override { return value(); }
-  bool start_object(std::size_t) override { return open(false); }
-  bool end_object() override { return close(); }
-  bool start_array(std::size_t) override { return open(true); }
-  bool end_array() override { return close(); }
-  bool key(string_t& k) override {
-    Level& l = levels_.back();
-    l.key = k;
-    if (!l.keys.insert(k).second) {
-      duplicate_ = path();
-      return false;  // stop: one is enough
-    }
-    return true;
-  }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
-    return false;  // the parser proper reports syntax errors
-  }
-  const std::string& duplicate() const { return duplicate_; }
-
- private:
-  struct Level {
-    bool is_array = false;
-    std::size_t index = 0;
-    std::string key;
-    std::set<std::string> keys;
-  };
-  bool value() {
-    if (!levels_.empty() && levels_.back().is_array) ++levels_.back().index;
-    return true;
-  }
-  bool open(bool is_array) {
-    levels_.push_back({is_array, 0, {}, {}});
-    return true;
-  }
-  bool close() {
-    levels_.pop_back();
-    return value();
-  }
-  std::string path() const {
-    std::string out;
-    for (const Level& l : levels_) {
-      if (l.is_array) {
-        out.append("[").append(std::to_string(l.index)).append("]");
-      } else {
-        if (!out.empty()) out += ".";
-        out += l.key;
-      }
-    }
-    return out;
-  }
-  std::vector<Level> levels_;
-  std::string duplicate_;
-};
-
 template <typename J>
 Result<J> parseAs(std::string_view text, const std::string& source) {
   if (auto st = checkStrictJson(text, source); !st) return st.error();
@@ -109,6 +46,50 @@ Result<J> parseAs(std::string_view text, const std::string& source) {
 }
 
 }  // namespace
+
+bool JsonPathTracker::key(string_t& k) {
+  Level& l = levels_.back();
+  l.key = k;
+  if (!l.keys.insert(k).second) {
+    duplicate_ = path();
+    return false;  // stop: one is enough
+  }
+  return true;
+}
+
+bool JsonPathTracker::parse_error(std::size_t, const std::string&,
+                                  const nlohmann::detail::exception&) {
+  error_path_ = path();
+  return false;
+}
+
+bool JsonPathTracker::value() {
+  if (!levels_.empty() && levels_.back().is_array) ++levels_.back().index;
+  return true;
+}
+
+bool JsonPathTracker::open(bool is_array) {
+  levels_.push_back({is_array, 0, {}, {}});
+  return true;
+}
+
+bool JsonPathTracker::close() {
+  levels_.pop_back();
+  return value();
+}
+
+std::string JsonPathTracker::path() const {
+  std::string out;
+  for (const Level& l : levels_) {
+    if (l.is_array) {
+      out.append("[").append(std::to_string(l.index)).append("]");
+    } else {
+      if (!out.empty()) out += ".";
+      out += l.key;
+    }
+  }
+  return out;
+}
 
 Result<std::string> readInputFile(const std::string& path, const std::string& what,
                                   std::size_t max_bytes) {
@@ -144,7 +125,7 @@ Status checkStrictJson(std::string_view text, const std::string& source) {
     return Error{source + ": " + placeOf(text, nul) +
                  ": a NUL byte; the document must be text only"};
   }
-  DuplicateKeys dup;
+  JsonPathTracker dup;
   nlohmann::json::sax_parse(text, &dup, nlohmann::json::input_format_t::json, false);
   if (!dup.duplicate().empty()) {
     return Error{source + ": " + dup.duplicate() +

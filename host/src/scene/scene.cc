@@ -250,65 +250,6 @@ void parsePoses(const json& doc, Scene& s) {
   }
 }
 
-// Follows a SAX parse and remembers the field path at which parsing stopped. Used only to name
-// the field of a number too large for a double ("1e999"): nlohmann rejects it while parsing,
-// before there is a document to walk, and its message names no field.
-class FieldPathTracker : public nlohmann::json_sax<json> {
- public:
-  const std::string& errorPath() const { return error_path_; }
-
-  bool null() override { return value(); }
-  bool boolean(bool) override { return value(); }
-  bool number_integer(number_integer_t) override { return value(); }
-  bool number_unsigned(number_unsigned_t) override { return value(); }
-  bool number_float(number_float_t, const string_t&) override { return value(); }
-  bool string(string_t&) override { return value(); }
-  bool binary(binary_t&) override { return value(); }
-  bool start_object(std::size_t) override { return open(false); }
-  bool key(string_t& k) override {
-    levels_.back().key = k;
-    return true;
-  }
-  bool end_object() override { return close(); }
-  bool start_array(std::size_t) override { return open(true); }
-  bool end_array() override { return close(); }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::json::exception&) override {
-    error_path_ = path();
-    return false;
-  }
-
- private:
-  struct Level {
-    bool is_array = false;
-    size_t index = 0;  // arrays: the element being parsed
-    std::string key;   // objects: the member being parsed
-  };
-
-  // A complete value moves an enclosing array on to its next element.
-  bool value() {
-    if (!levels_.empty() && levels_.back().is_array) ++levels_.back().index;
-    return true;
-  }
-  bool open(bool is_array) {
-    levels_.push_back({is_array, 0, {}});
-    return true;
-  }
-  bool close() {
-    levels_.pop_back();
-    return value();
-  }
-  std::string path() const {
-    std::string out;
-    for (const Level& l : levels_) {
-      out = l.is_array ? element(out, l.index) : member(out, l.key);
-    }
-    return out.empty() ? "(document)" : out;
-  }
-
-  std::vector<Level> levels_;
-  std::string error_path_;
-};
-
 }  // namespace
 
 Result<Scene> parseScene(const std::string& json_text, const std::string& source) {
@@ -317,9 +258,11 @@ Result<Scene> parseScene(const std::string& json_text, const std::string& source
   try {
     doc = json::parse(json_text);
   } catch (const json::out_of_range&) {  // a number too large for a double
-    FieldPathTracker tracker;
+    // nlohmann names no field for a number too large for a double: follow the parse to it.
+    JsonPathTracker tracker;
     json::sax_parse(json_text, &tracker);
-    return Error{source + ": " + tracker.errorPath() + ": expected a finite number"};
+    const std::string& at = tracker.errorPath();
+    return Error{source + ": " + (at.empty() ? "(document)" : at) + ": expected a finite number"};
   } catch (const json::exception& e) {  // syntax errors, with line and column
     return Error{source + ": " + withoutExceptionTag(e.what())};
   }

@@ -7,8 +7,10 @@
 #pragma once
 
 #include <cstddef>
+#include <set>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -27,6 +29,46 @@ inline constexpr std::size_t kMaxInputFileBytes = std::size_t{256} << 20;
 // `max_bytes`, or a read error.
 Result<std::string> readInputFile(const std::string& path, const std::string& what,
                                   std::size_t max_bytes = kMaxInputFileBytes);
+
+// A SAX pass that follows the member path of the value being parsed (`tables[1].x`; "" at the
+// top): the first key an object holds twice stops it (duplicate()), and so does a parse error
+// (errorPath(): where it stopped, e.g. to name the field of a number too large for a double,
+// which nlohmann reports without one). Used by checkStrictJson and the scene reader.
+class JsonPathTracker final : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  const std::string& duplicate() const { return duplicate_; }
+  const std::string& errorPath() const { return error_path_; }
+
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return open(false); }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(true); }
+  bool end_array() override { return close(); }
+  bool key(string_t& k) override;
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override;
+
+ private:
+  struct Level {
+    bool is_array = false;
+    std::size_t index = 0;  // arrays: the element being parsed
+    std::string key;        // objects: the member being parsed
+    std::set<std::string> keys;
+  };
+  bool value();  // a complete value moves an enclosing array on to its next element
+  bool open(bool is_array);
+  bool close();
+  std::string path() const;
+
+  std::vector<Level> levels_;
+  std::string duplicate_;
+  std::string error_path_;
+};
 
 // okStatus() when `text` is one JSON document a strict reader accepts; else an Error
 // "<source>: <place>: <why>" for what nlohmann alone lets through: a byte-order mark (byte 0),
