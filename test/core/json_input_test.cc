@@ -9,16 +9,12 @@
 #include <filesystem>
 #include <fstream>
 
+#include "support/temp_dir.h"
+
 using namespace crunch;
 namespace fs = std::filesystem;
 
 namespace {
-fs::path freshDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("crunch_json_input_" + name);
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d;
-}
 void write(const fs::path& p, const std::string& bytes) {
   std::ofstream out(p, std::ios::binary);
   out << bytes;
@@ -77,7 +73,8 @@ TEST_CASE("Strict JSON: syntax errors and trailing bytes name the file, line and
 
 TEST_CASE("readInputFile: a regular file whole, a directory, a FIFO, a device, a missing or an "
           "oversized file is an Error naming it", "[core]") {
-  const fs::path d = freshDir("read");
+  TempDir scratch;
+  const fs::path d = scratch.path();
   const fs::path ok = d / "ok.json";
   write(ok, "{\"a\": 1}");
   const auto text = readInputFile(ok.string(), "scene file");
@@ -106,5 +103,4 @@ TEST_CASE("readInputFile: a regular file whole, a directory, a FIFO, a device, a
   const auto big = readInputFile(ok.string(), "scene file", 4);
   REQUIRE_FALSE(big);
   CHECK(contains(big.error().message, "ok.json: cannot read scene file: is 8 bytes, more than the 4"));
-  fs::remove_all(d);
 }

@@ -142,6 +142,16 @@ MappingOptions options(std::uint64_t seed, int global_sweeps) {
   return o;
 }
 
+// The script's poses through a Mapper over their reach, then finish(): the run untouched.
+Map plainRun(const std::vector<WhiskerMount>& mounts, const Script& script,
+             const MappingOptions& o) {
+  const auto [lo, hi] = reach(script.poses, mounts);
+  Mapper m(mounts, lo, hi, o);
+  for (std::size_t t = 0; t < script.poses.size(); ++t)
+    m.addPose(script.poses[t], script.reports[t], script.rays[t]);
+  return m.finish();
+}
+
 }  // namespace
 
 TEST_CASE("Mapper: pose by pose gives exactly runMapping's map", "[mapping][mapper]") {
@@ -174,14 +184,7 @@ TEST_CASE("Mapper: a different seed gives a different run", "[mapping][mapper]")
   // The equality above is not vacuous: the sampler's draws depend on the seed.
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
   const Script script = tableScript(mounts);
-  const auto [lo, hi] = reach(script.poses, mounts);
-  auto run = [&](std::uint64_t seed) {
-    Mapper m(mounts, lo, hi, options(seed, 4));
-    for (std::size_t t = 0; t < script.poses.size(); ++t)
-      m.addPose(script.poses[t], script.reports[t], script.rays[t]);
-    return m.finish();
-  };
-  const Map a = run(1), b = run(2);
+  const Map a = plainRun(mounts, script, options(1, 4)), b = plainRun(mounts, script, options(2, 4));
   bool differ = a.stats.proposals != b.stats.proposals || a.tables.size() != b.tables.size();
   for (std::size_t i = 0; !differ && i < a.tables.size(); ++i)
     differ = !samePose(a.tables[i].pose, b.tables[i].pose);
@@ -198,10 +201,7 @@ TEST_CASE("Mapper: snapshot() between poses does not change the final map", "[ma
   const auto [lo, hi] = reach(script.poses, mounts);
   const MappingOptions o = options(5, 4);
 
-  Mapper plain(mounts, lo, hi, o);
-  for (std::size_t t = 0; t < script.poses.size(); ++t)
-    plain.addPose(script.poses[t], script.reports[t], script.rays[t]);
-  const Map expected = plain.finish();
+  const Map expected = plainRun(mounts, script, o);
 
   Mapper watched(mounts, lo, hi, o);
   for (std::size_t t = 0; t < script.poses.size(); ++t) {
@@ -224,10 +224,7 @@ TEST_CASE("Mapper: inferNow() is the global inference so far and leaves the run'
   const auto [lo, hi] = reach(script.poses, mounts);
   const MappingOptions o = options(5, 4);
 
-  Mapper plain(mounts, lo, hi, o);
-  for (std::size_t t = 0; t < script.poses.size(); ++t)
-    plain.addPose(script.poses[t], script.reports[t], script.rays[t]);
-  const Map expected = plain.finish();
+  const Map expected = plainRun(mounts, script, o);
   REQUIRE_FALSE(expected.tables.empty());
 
   Mapper watched(mounts, lo, hi, o);
