@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "crunch/exploration/policy.h"
+#include "crunch/session/export.h"
 #include "robot_mode.h"
 #include "sim_mode.h"
 #include "sweep_chart.h"
@@ -259,6 +260,37 @@ CLI::App* addSweepChart(CLI::App& app, SweepChartOptions& o) {
   return chart;
 }
 
+// `crunchhost export` (session/export.h, docs/EXPORT.md): the library validates every setting.
+CLI::App* addExport(CLI::App& app, crunch::session::ExportOptions& o) {
+  auto* exp = app.add_subcommand(
+      "export", "write a map or a recording in formats other tools read: ros-map (map.json -> "
+                "map.pgm + map.yaml for ROS map_server / nav2_map_server) | csv (a recording -> "
+                "samples.csv, contacts.csv, odometry.csv) (docs/EXPORT.md)");
+  exp->add_option("--format", o.format, "ros-map | csv")->required();
+  exp->add_option("--in", o.in, "input: OUT/map.json (ros-map) or a recording .crec (csv)")
+      ->required();
+  exp->add_option("--out", o.out_dir, "output directory (created if missing)")->required();
+  exp->add_option("--resolution", o.ros.resolution,
+                  "ros-map: metres per cell, 0.001 to 1")
+      ->capture_default_str();
+  exp->add_flag("--tops-occupied", o.ros.tops_occupied,
+                "ros-map: table tops occupied too (default: only legs and walls; the Create "
+                "drives under table tops)");
+  return exp;
+}
+
+int runExportMode(crunch::session::ExportOptions& o, const CLI::App& exp) {
+  o.resolution_given = exp.count("--resolution") > 0;
+  o.tops_given = exp.count("--tops-occupied") > 0;
+  const auto r = crunch::session::runExport(o);
+  if (!r) {
+    std::cerr << "crunchhost export: " << r.error().message << "\n";
+    return 2;
+  }
+  std::cout << "crunchhost export: " << r.value().summary << "\n";
+  return r.value().damaged ? 3 : 0;
+}
+
 // --replay, --robot or --sim, with the options they share.
 int runTopLevel(TopLevel& t, RobotOptions& ropt) {
   SimOptions& opt = t.sim_opt;
@@ -312,6 +344,7 @@ int main(int argc, char** argv) {
   SweepOptions sweep_opt;
   MergeOptions merge_opt;
   SweepChartOptions chart_opt;
+  crunch::session::ExportOptions export_opt;
   addModes(app, top);
   addRobotOptions(app, ropt);
   addSimOptions(app, top);
@@ -320,6 +353,7 @@ int main(int argc, char** argv) {
   CLI::App* sweep = addSweep(app, sweep_opt);
   CLI::App* sweep_merge = addSweepMerge(app, merge_opt);
   CLI::App* sweep_chart = addSweepChart(app, chart_opt);
+  CLI::App* export_cmd = addExport(app, export_opt);
   // The contract's exit codes (ARCHITECTURE.md §4): a command line CLI11 cannot parse is bad
   // input, exit 2 (CLI11's own codes are 100 and up); --help and --version exit 0.
   try {
@@ -329,6 +363,13 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   const bool top_mode = top.sim || top.robot || !top.replay.empty();
+  if (*export_cmd) {
+    if (top_mode) {
+      std::cerr << "crunchhost: export is a mode of its own: drop --sim/--robot/--replay\n";
+      return 2;
+    }
+    return runExportMode(export_opt, *export_cmd);
+  }
   if (*sweep || *sweep_merge || *sweep_chart) {
     if (top_mode) {
       std::cerr << "crunchhost: sweep is a mode of its own: drop --sim/--robot/--replay\n";

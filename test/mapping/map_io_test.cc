@@ -260,3 +260,67 @@ TEST_CASE("MapIo: ensureDirectory creates parents and rejects a file in the way"
   CHECK(s.error().message.rfind(file.string() + ": ", 0) == 0);
   CHECK_FALSE(crunch::ensureDirectory("").ok());
 }
+
+TEST_CASE("MapIo: free_space is written as row runs and read back cell for cell", "[mapping]") {
+  Map m;
+  crunch::FreeSpaceLayer& f = m.free_space;
+  f.origin = {-0.25, 0.5};
+  f.cell = 0.01;
+  f.nx = 7;
+  f.ny = 3;
+  // Row 0: cells 0-1 and 4; row 1: none; row 2: 6 (the last cell) only.
+  f.swept = {1, 1, 0, 0, 1, 0, 0, /**/ 0, 0, 0, 0, 0, 0, 0, /**/ 0, 0, 0, 0, 0, 0, 1};
+  const std::string text = crunch::mapToJson(m);
+  CHECK(text.find("\"0+2 4+1\"") != std::string::npos);
+  CHECK(text.find("\"6+1\"") != std::string::npos);
+  const auto r = crunch::parseMapJson(text, "map.json");
+  INFO((r.ok() ? std::string() : r.error().message));
+  REQUIRE(r.ok());
+  const crunch::FreeSpaceLayer& g = r.value().free_space;
+  CHECK(g.origin == f.origin);
+  CHECK(g.cell == f.cell);
+  CHECK(g.nx == 7);
+  CHECK(g.ny == 3);
+  CHECK(g.swept == f.swept);
+}
+
+TEST_CASE("MapIo: a map without free_space reads as an empty layer and writes no key",
+          "[mapping]") {
+  const auto r = crunch::parseMapJson(R"({"schema": "crunch.map/1"})", "map.json");
+  REQUIRE(r.ok());
+  CHECK(r.value().free_space.empty());
+  CHECK(crunch::mapToJson(Map{}).find("free_space") == std::string::npos);
+}
+
+TEST_CASE("MapIo: a bad free_space is an error naming the field", "[mapping]") {
+  const std::string head = R"({"schema": "crunch.map/1", "free_space": )";
+  const struct {
+    const char* fs;
+    const char* field;
+  } cases[] = {
+      {R"({"cell": 0, "origin": [0, 0], "size": [2, 1], "rows": [""]})", "free_space.cell"},
+      {R"({"cell": 0.01, "origin": [0], "size": [2, 1], "rows": [""]})", "free_space.origin"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [2, 2], "rows": [""]})", "free_space.rows"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [4, 1], "rows": ["3+2"]})",
+       "free_space.rows[0]"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [9, 1], "rows": ["3+2 4+1"]})",
+       "free_space.rows[0]"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [9, 1], "rows": ["3+0"]})",
+       "free_space.rows[0]"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [9, 1], "rows": ["1+1 "]})",
+       "free_space.rows[0]"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [9, 1], "rows": ["x"]})", "free_space.rows[0]"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [9, 1], "rows": [3]})", "free_space.rows[0]"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [100000, 100000], "rows": []})",
+       "free_space.size"},
+      {R"({"cell": 0.01, "origin": [0, 0], "size": [2, 1], "rows": [""], "extra": 1})",
+       "free_space.extra"},
+  };
+  for (const auto& c : cases) {
+    const auto r = crunch::parseMapJson(head + c.fs + "}", "m.json");
+    INFO(c.fs);
+    REQUIRE_FALSE(r.ok());
+    INFO(r.error().message);
+    CHECK(r.error().message.rfind(std::string("m.json: ") + c.field, 0) == 0);
+  }
+}

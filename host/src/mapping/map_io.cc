@@ -26,6 +26,24 @@ double normaliseTableTheta(double theta) {
   return t;
 }
 
+// free_space.rows[iy]: the swept cells of row iy as runs "start+length", separated by spaces.
+std::string sweptRuns(const FreeSpaceLayer& f, int iy) {
+  std::string row;
+  for (int ix = 0; ix < f.nx;) {
+    if (!f.at(ix, iy)) {
+      ++ix;
+      continue;
+    }
+    const int start = ix;
+    while (ix < f.nx && f.at(ix, iy)) ++ix;
+    if (!row.empty()) row += ' ';
+    row += std::to_string(start);
+    row += '+';
+    row += std::to_string(ix - start);
+  }
+  return row;
+}
+
 }  // namespace
 
 std::string mapToJson(const Map& map) {
@@ -79,6 +97,15 @@ std::string mapToJson(const Map& map) {
                 {"wall_s", s.wall_s},
                 {"peak_live_tables", s.peak_live_tables},
                 {"peak_live_legs", s.peak_live_legs}}}};
+  const FreeSpaceLayer& f = map.free_space;
+  if (!f.empty()) {
+    OrderedJson rows = OrderedJson::array();
+    for (int iy = 0; iy < f.ny; ++iy) rows.push_back(sweptRuns(f, iy));
+    doc["free_space"] = {{"cell", f.cell},
+                         {"origin", {f.origin.x(), f.origin.y()}},
+                         {"size", {f.nx, f.ny}},
+                         {"rows", std::move(rows)}};
+  }
   return doc.dump(2) + "\n";
 }
 
@@ -126,6 +153,82 @@ MapTable parseTable(const Json& j, const std::string& path) {
   t.score = optionalNumber(j, path, "score", 0.0);
   t.support = optionalCount<int>(j, path, "support");
   return t;
+}
+
+// One row of free_space.rows: runs "start+length" separated by single spaces, each inside the
+// row and after the one before it.
+void parseSweptRow(const Json& j, const std::string& path, int iy, FreeSpaceLayer& f) {
+  if (!j.is_string()) fail(path, std::string("expected a string of runs, got ") + j.type_name());
+  const std::string& row = j.get_ref<const std::string&>();
+  const auto bad = [&path](const std::string& why) {
+    fail(path, why + " (expected runs \"start+length\" separated by spaces)");
+  };
+  std::size_t i = 0;
+  long long next_free = 0;  // the first cell a run may start at
+  while (i < row.size()) {
+    const auto digits = [&row, &i, &bad]() {
+      const std::size_t from = i;
+      long long v = 0;
+      while (i < row.size() && row[i] >= '0' && row[i] <= '9' && v <= (1LL << 40)) {
+        v = v * 10 + (row[i] - '0');
+        ++i;
+      }
+      if (i == from) bad(std::string("a run without a number at character ").append(std::to_string(from)));
+      return v;
+    };
+    const long long start = digits();
+    if (i >= row.size() || row[i] != '+') {
+      bad(std::string("a run without '+' at character ").append(std::to_string(i)));
+    }
+    ++i;
+    const long long length = digits();
+    if (length < 1 || start < next_free || start + length > f.nx) {
+      std::string why = "run ";
+      why.append(std::to_string(start)).append("+").append(std::to_string(length));
+      why.append(" is empty, overlaps or touches the run before it, or leaves the row of ");
+      why.append(std::to_string(f.nx)).append(" cells");
+      bad(why);
+    }
+    for (long long ix = start; ix < start + length; ++ix) {
+      f.swept[static_cast<std::size_t>(iy) * static_cast<std::size_t>(f.nx) +
+              static_cast<std::size_t>(ix)] = 1;
+    }
+    next_free = start + length + 1;
+    if (i < row.size()) {
+      if (row[i] != ' ' || i + 1 == row.size()) {
+        bad(std::string("a stray character at ").append(std::to_string(i)));
+      }
+      ++i;
+    }
+  }
+}
+
+FreeSpaceLayer parseFreeSpace(const Json& j) {
+  const std::string path = "free_space";
+  expectObject(j, path, {"cell", "origin", "size", "rows"});
+  FreeSpaceLayer f;
+  f.cell = requiredNumber(j, path, "cell");
+  if (!(f.cell > 0.0)) fail(member(path, "cell"), "expected a cell side > 0 m");
+  const Json& origin = array(required(j, path, "origin"), member(path, "origin"), 2);
+  f.origin = {number(origin[0], member(path, "origin[0]")),
+              number(origin[1], member(path, "origin[1]"))};
+  const Json& size = array(required(j, path, "size"), member(path, "size"), 2);
+  // At most 10^8 cells (a 100 x 100 m floor at 1 cm): a bound on the memory a map file can ask.
+  constexpr int kMaxSide = 100000;
+  f.nx = json_fields::count(size[0], member(path, "size[0]"), kMaxSide);
+  f.ny = json_fields::count(size[1], member(path, "size[1]"), kMaxSide);
+  if (static_cast<long long>(f.nx) * f.ny > 100'000'000LL) {
+    fail(member(path, "size"), "more than 10^8 cells");
+  }
+  const Json& rows = required(j, path, "rows");
+  array(rows, member(path, "rows"), static_cast<size_t>(f.ny));
+  f.swept.assign(static_cast<std::size_t>(f.nx) * static_cast<std::size_t>(f.ny), 0);
+  for (int iy = 0; iy < f.ny; ++iy) {
+    const auto i = static_cast<size_t>(iy);
+    parseSweptRow(rows[i], element(member(path, "rows"), i), iy, f);
+  }
+  if (f.nx == 0 || f.ny == 0) f = FreeSpaceLayer{};
+  return f;
 }
 
 Map parseMapDocument(const Json& doc) {
@@ -191,6 +294,8 @@ Map parseMapDocument(const Json& doc) {
     s.peak_live_tables = optionalCount<int>(*stats, "stats", "peak_live_tables");
     s.peak_live_legs = optionalCount<int>(*stats, "stats", "peak_live_legs");
   }
+  const auto free_space = doc.find("free_space");
+  if (free_space != doc.end()) map.free_space = parseFreeSpace(*free_space);
   return map;
 }
 

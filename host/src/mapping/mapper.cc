@@ -274,8 +274,26 @@ void Mapper::drawSamples(int n, double beta, int sweeps_between, std::vector<Map
   }
 }
 
+FreeSpaceLayer sweptLayer(const FreeSpaceGrid& grid) {
+  FreeSpaceLayer f;
+  if (grid.rays() == 0) return f;  // nothing swept: no layer (the file gains no key)
+  f.origin = grid.origin();
+  f.cell = grid.cell();
+  f.nx = grid.cellsX();
+  f.ny = grid.cellsY();
+  f.swept.resize(static_cast<std::size_t>(f.nx) * static_cast<std::size_t>(f.ny));
+  for (int iy = 0; iy < f.ny; ++iy) {
+    for (int ix = 0; ix < f.nx; ++ix) {
+      f.swept[static_cast<std::size_t>(iy) * static_cast<std::size_t>(f.nx) +
+              static_cast<std::size_t>(ix)] = grid.countAt(ix, iy) > 0 ? 1 : 0;
+    }
+  }
+  return f;
+}
+
 Map Mapper::snapshot() const {
   Map map = map_;
+  map.free_space = sweptLayer(free_space_);
   map.stats.poses = pose_count_;
   map.stats.shapelets = static_cast<int>(map.shapelets.size());
   map.stats.proposals = sampler_.stats().proposals;
@@ -299,6 +317,7 @@ Map Mapper::inferNow(Rng& rng) const {
 }
 
 void Mapper::infer(Map& map, uint64_t chain_seed) const {
+  map.free_space = sweptLayer(free_space_);
   map.stats.poses = pose_count_;
   map.stats.shapelets = static_cast<int>(map.shapelets.size());
   map.stats.proposals = sampler_.stats().proposals;

@@ -1,6 +1,7 @@
 // The result of a mapping run: the map file contract of ARCHITECTURE.md §4 as C++ values.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -60,12 +61,32 @@ struct MapSample {
   std::vector<MapWall> walls;
 };
 
+// The floor the whiskers swept without touching anything (issue 17): the cells of the mapper's
+// negative-evidence grid (blackboard/free_space.h) that at least one free whisker sample passed
+// through. Cell (ix, iy) covers origin + [ix, ix + 1) x [iy, iy + 1) cells; swept[iy * nx + ix]
+// is 1 when swept. Empty (nx == 0) when the run had none or the map file predates it. It is what
+// a robotics tool's occupancy grid calls "free"; docs/EXPORT.md.
+struct FreeSpaceLayer {
+  Vec2 origin{0.0, 0.0};
+  double cell = 0.0;
+  int nx = 0, ny = 0;
+  std::vector<std::uint8_t> swept;
+
+  bool empty() const { return nx == 0 || ny == 0; }
+  bool at(int ix, int iy) const {
+    return ix >= 0 && iy >= 0 && ix < nx && iy < ny &&
+           swept[static_cast<std::size_t>(iy) * static_cast<std::size_t>(nx) +
+                 static_cast<std::size_t>(ix)] != 0;
+  }
+};
+
 struct Map {
   std::vector<MapTable> tables;  // the fused map
   std::vector<MapWall> walls;    // none yet: walls are not modelled (paper's future work)
   std::vector<PoseMap> per_pose;
   std::vector<Shapelet> shapelets;  // every shapelet of the run, for pictures
   MapStats stats;
+  FreeSpaceLayer free_space;  // map.json's optional "free_space" (map_io.h)
 };
 
 }  // namespace crunch

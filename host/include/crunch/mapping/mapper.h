@@ -101,6 +101,11 @@ class Mapper {
   std::size_t sample_fed_ = 0;
 };
 
+// The cells of `grid` that at least one free whisker sample passed through (Map::free_space);
+// empty when no ray was added. snapshot(), finish() and inferNow() fill their map's free_space
+// with it.
+FreeSpaceLayer sweptLayer(const FreeSpaceGrid& grid);
+
 // A table of the model's one size at `pose`.
 MapTable modelTable(const Pose2& pose, const ModelParams& model);
 // A table hypothesis of its own size as a map table, written with width >= depth (a w x d table

@@ -123,6 +123,8 @@ class RobotSession {
   }
   // The rays the whiskers swept free during the last whisk handed to the mapper.
   const std::vector<FreeRay>& lastFreeRays() const { return free_rays_; }
+  // The contact reports of the last whisk handed to the mapper (the CSV export's contacts).
+  const std::vector<ContactReport>& lastReports() const { return reports_; }
   const RobotSessionOptions& options() const { return options_; }
 
   const RobotSessionCounts& counts() const { return counts_; }

@@ -1,0 +1,52 @@
+// `crunchhost export` in the library (issue 17; docs/EXPORT.md): CrunchBot's outputs in the
+// formats other robotics tools read.
+//   --format ros-map  map.json -> map.pgm + map.yaml for map_server / nav2_map_server
+//                     (render/ros_map.h);
+//   --format csv      a recording (.crec) -> one CSV per stream: decoded samples, contact reports,
+//                     odometry (session/recording_csv.h).
+// One road in: every setting is checked here (ExportOptions::validate), whichever front end set
+// it; crunchhost only parses and hands them over.
+//
+// Thread-safety: none needed (values in, files out).
+#pragma once
+
+#include <string>
+
+#include "crunch/core/result.h"
+#include "crunch/render/ros_map.h"
+
+namespace crunch::session {
+
+enum class ExportFormat { kRosMap, kCsv };
+
+// "ros-map" | "csv"; an Error names --format and the choices.
+Result<ExportFormat> exportFormatByName(const std::string& name);
+
+struct ExportOptions {
+  std::string format;   // --format
+  std::string in;       // --in: map.json (ros-map) or a recording (csv)
+  std::string out_dir;  // --out: created if missing
+  RosMapOptions ros;    // --resolution, --tops-occupied (ros-map only)
+  // Whether --resolution / --tops-occupied were given: with --format csv they mean nothing and
+  // are refused rather than ignored.
+  bool resolution_given = false;
+  bool tops_given = false;
+
+  // okStatus(), or an Error naming the first bad flag: --format, --in (empty), --out (empty),
+  // --resolution (RosMapOptions::validate), a ros-map flag with --format csv.
+  Status validate() const;
+};
+
+struct ExportReport {
+  // One line for the user: what was written, cell or row counts, and what the input lacked
+  // (a map without free space, a damaged recording).
+  std::string summary;
+  // A damaged recording (csv): exported up to the damage; crunchhost exits 3 (ARCHITECTURE.md §4).
+  bool damaged = false;
+};
+
+// Validates `options`, then writes the chosen format's files into options.out_dir. An Error names
+// the flag or the file; nothing is written then.
+Result<ExportReport> runExport(const ExportOptions& options);
+
+}  // namespace crunch::session
