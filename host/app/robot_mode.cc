@@ -51,7 +51,7 @@ Result<RobotPlan> planRobot(const RobotOptions& opt) {
   auto usb_id = io::parseUsbId(opt.usb);
   if (!usb_id) return Error{"--usb: " + usb_id.error().message};
   plan.usb_id = usb_id.value();
-  plan.models_path = opt.models_path.empty() ? std::string(CRUNCH_DEFAULT_MODELS) : opt.models_path;
+  plan.models_path = opt.models_path.empty() ? signal::shippedModelsPath(CRUNCH_DEFAULT_MODELS) : opt.models_path;
   auto models = signal::loadModels(plan.models_path);
   if (!models) return Error{"--robot: " + models.error().message};
   RobotSessionOptions& s = plan.session;

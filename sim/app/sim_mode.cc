@@ -8,6 +8,7 @@
 #include "crunch/core/atomic_file.h"
 #include "crunch/mapping/map_io.h"
 #include "crunch/render/map_render.h"
+#include "crunch/signal/models_io.h"
 #include "crunch_sim/sim_report.h"
 #include "crunch_sim/sim_run.h"
 #include "progress.h"
@@ -55,7 +56,7 @@ Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
   auto noise = noiseRegimeByName(opt.noise);
   if (!noise) return Error{"--" + noise.error().message};
   o.noise = noise.value();
-  o.models_path = opt.models_path.empty() ? std::string(CRUNCH_DEFAULT_MODELS) : opt.models_path;
+  o.models_path = opt.models_path.empty() ? crunch::signal::shippedModelsPath(CRUNCH_DEFAULT_MODELS) : opt.models_path;
   o.seed = opt.seed;
   o.mapping = opt.mapping;
   o.chain_fusion_given = opt.chain_fusion_given;

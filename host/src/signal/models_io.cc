@@ -360,4 +360,15 @@ Result<SignalModels> loadModels(const std::string& path) {
   return parseModelsJson(text.value(), path);
 }
 
+std::string shippedModelsPath(const std::string& source_tree_path) {
+  std::error_code ec;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const std::filesystem::path installed =
+        exe.parent_path().parent_path() / "share" / "crunchbot" / "models" / "sim_models.json";
+    if (std::filesystem::is_regular_file(installed, ec)) return installed.string();
+  }
+  return source_tree_path;
+}
+
 }  // namespace crunch::signal

@@ -71,4 +71,10 @@ Status saveModels(const SignalModels& models, const std::string& path);
 // Reads and parses `path`. A missing or unreadable file is an Error naming `path`.
 Result<SignalModels> loadModels(const std::string& path);
 
+// Where the shipped models (models/sim_models.json) are for the running program: an installed
+// crunchhost (cmake --install, the .deb; issue 17) finds them at
+// <its bin directory>/../share/crunchbot/models/sim_models.json, and when that file exists it
+// is the answer; a crunchhost in its build tree has none there and gets `source_tree_path`.
+std::string shippedModelsPath(const std::string& source_tree_path);
+
 }  // namespace crunch::signal
