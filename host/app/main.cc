@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "crunch/core/atomic_file.h"
 #include "crunch/exploration/policy.h"
 #include "crunch/session/export.h"
 #include "robot_mode.h"
@@ -338,6 +339,13 @@ int runTopLevel(TopLevel& t, RobotOptions& ropt) {
 int main(int argc, char** argv) {
   CLI::App app{"crunchhost: map table-like objects by touch with a whiskered robot"};
   app.set_version_flag("--version", "crunchhost 0.1.0");
+  app.footer(
+      "Exit status (ARCHITECTURE.md §4):\n"
+      "  0  success\n"
+      "  1  an output could not be written (e.g. disk full): no output is left half-written\n"
+      "  2  bad input or setting: the file, field or option is named; nothing is written\n"
+      "  3  a device missing or a recording damaged: what was replayed is written, and said so\n"
+      "A SIGINT or SIGTERM before the end leaves no output (--robot: ends the run and writes it).");
   TopLevel top;
   RobotOptions ropt;
   TrainOptions train_opt;
@@ -362,6 +370,8 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? 0 : 2;
   }
+  // From here on a signal that ends the process removes every output's temporary first.
+  crunch::removeTempsOnSignals();
   const bool top_mode = top.sim || top.robot || !top.replay.empty();
   if (*export_cmd) {
     if (top_mode) {

@@ -178,12 +178,18 @@ json robotReport(const RobotSession& session, const Map& map, const session::Rob
   return report;
 }
 
-// map.json, map.png, then report.json; stops at the first failure. 0, or 1 with the error said.
+// map.json, map.png and report.json, published together (OutputSet) or not at all. 0, or 1
+// with the error said.
 int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string& out_dir,
                  const std::string& title, const json& report, std::ostream& err,
                  const exploration::ExplorationReport* exploration = nullptr) {
-  Status st = session::writeMapFiles(map, s.area_hi, out_dir, title, exploration);
-  if (st) st = writeFileAtomic(out_dir + "/report.json", report.dump(2) + "\n");
+  OutputSet outputs;
+  Status st = session::stageMapFiles(outputs, map, s.area_hi, out_dir, title, exploration);
+  if (st) {
+    auto file = outputs.add(out_dir + "/report.json");
+    st = file ? file.value()->write(report.dump(2) + "\n") : Status(file.error());
+  }
+  if (st) st = outputs.publish();
   if (!st) {
     err << "crunchhost: " << st.error().message << "\n";
     return 1;
@@ -268,6 +274,12 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: --robot: " << session.error().message << "\n";
     return 2;
   }
+  // A --out that cannot take the outputs is refused before the devices are opened.
+  if (Status s = checkOutputTargets(opt.out_dir, {"map.json", "map.png", "report.json"}); !s) {
+    err << "crunchhost: --robot: --out " << s.error().message << "\n";
+    return 2;
+  }
+  removeStaleTemps(opt.out_dir, {"map.json", "map.png", "report.json"});
   Devices d;  // ---- both devices are tried, every missing one named: exit 3
   if (!openDevices(opt, plan.value(), d, err)) return 3;
   auto recorder = openRecording(opt, plan.value());
@@ -290,6 +302,7 @@ int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: --replay: --out " << s.error().message << "\n";
     return 2;
   }
+  removeStaleTemps(opt.out_dir, {"map.json", "map.png", "report.json"});
   auto replayed = session::replayRecording(opt.recording, opt.threads);
   if (!replayed) {  // the header or the settings: nothing written
     err << "crunchhost: --replay: " << replayed.error().message << "\n";

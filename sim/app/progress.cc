@@ -36,7 +36,9 @@ std::string formatDuration(double s) {
 void PoseProgress::operator()(int done, int total) {
   if (json_) {
     if (done == total || done % 20 == 0)
-      os_ << "{\"event\":\"progress\",\"done\":" << done << ",\"total\":" << total << "}\n";
+      // Flushed per line: a program reading the pipe sees each event as it happens.
+      os_ << "{\"event\":\"progress\",\"done\":" << done << ",\"total\":" << total << "}"
+          << std::endl;
     return;
   }
   const int width = 40;

@@ -68,7 +68,8 @@ Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
   return o;
 }
 
-// Each file complete or not at all; stops at the first failure.
+// All the run's files or none (OutputSet): each is written to a temporary, and they replace
+// their targets together once every one is complete.
 Status writeOutputs(const SimOptions& opt, const sim::SimScene& scene, const sim::SimRun& run,
                     const sim::SimRunOptions& ro, double total_s) {
   if (auto s = ensureDirectory(opt.out_dir); !s) return s;
@@ -80,22 +81,41 @@ Status writeOutputs(const SimOptions& opt, const sim::SimScene& scene, const sim
     render.title += ", --explore " + run.exploration->policy +
                     (run.exploration->teleport ? " --teleport" : " (driven)");
   }
+  OutputSet outputs;
+  auto text = [&](const std::string& path, const std::string& contents) -> Status {
+    auto f = outputs.add(path);
+    if (!f) return f.error();
+    return f.value()->write(contents);
+  };
+  auto picture = [&](const std::string& path, const auto& draw) -> Status {
+    auto f = outputs.add(path);
+    if (!f) return f.error();
+    return draw(*f.value());
+  };
   const std::function<Status()> writes[] = {
-      [&] { return writeFileAtomic(dir + "map.json", mapToJson(run.map)); },
-      [&] { return renderMapPng(run.map, scene.scene, dir + "map.png", render); },
+      [&] { return text(dir + "map.json", mapToJson(run.map)); },
       [&] {
-        return writeFileAtomic(dir + "report.json",
-                               sim::simReportJson(scene.scene, run, ro, total_s));
+        return picture(dir + "map.png",
+                       [&](AtomicFile& f) { return renderMapPng(run.map, scene.scene, f, render); });
       },
+      [&] { return text(dir + "report.json", sim::simReportJson(scene.scene, run, ro, total_s)); },
       [&]() -> Status {
         if (!run.snapshot) return okStatus();
         const std::string base = dir + "snapshot_" + std::to_string(run.snapshot->pose_index);
-        if (Status st = renderSnapshotPng(*run.snapshot, scene.scene, base + ".png"); !st) return st;
-        return renderSnapshotSvg(*run.snapshot, scene.scene, base + ".svg");
+        if (Status st = picture(base + ".png",
+                                [&](AtomicFile& f) {
+                                  return renderSnapshotPng(*run.snapshot, scene.scene, f);
+                                });
+            !st) {
+          return st;
+        }
+        return picture(base + ".svg", [&](AtomicFile& f) {
+          return renderSnapshotSvg(*run.snapshot, scene.scene, f);
+        });
       }};
   for (const auto& write : writes)
-    if (Status status = write(); !status) return status;
-  return okStatus();
+    if (Status status = write(); !status) return status;  // ~OutputSet removes the temporaries
+  return outputs.publish();
 }
 
 void printSummary(const SimOptions& opt, const sim::SimScene& scene, const sim::SimRun& run,
@@ -144,6 +164,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: --out " << s.error().message << "\n";
     return 2;
   }
+  removeStaleTemps(opt.out_dir, {"map.json", "map.png", "report.json"});
   PoseProgress bar(opt.json_progress ? out : err, opt.json_progress);
   ro.value().mapping.progress = [&bar](int done, int total) { bar(done, total); };
   const sim::SimScene scene = sim::SimScene::build(std::move(loaded).value());

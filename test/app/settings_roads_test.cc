@@ -3,8 +3,11 @@
 // nothing written. This file covers the command line (`--sim`) and the sweep grid (`sweep`);
 // the recording-metadata road (`--replay`) is covered in test/session. Each case runs the
 // crunchhost binary as a user would.
+#include <signal.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <cstdio>
@@ -150,4 +153,107 @@ TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing writt
                           Case{"--noise realistic,bogus", "bogus"},
                           Case{"--noise-scale 1,1e9", "sigma_r"});
   expectRefused("sweep", c);
+}
+
+namespace {
+
+// Runs crunchhost with `args` (no shell), its output to /dev/null; the exit status and the
+// child's peak resident memory (ru_maxrss, KiB).
+struct Child {
+  int status = -1;
+  long max_rss_kib = 0;
+};
+Child runMeasured(const std::vector<std::string>& args) {
+  std::vector<char*> argv{const_cast<char*>(CRUNCHHOST)};
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    std::freopen("/dev/null", "w", stdout);
+    std::freopen("/dev/null", "w", stderr);
+    ::execv(CRUNCHHOST, argv.data());
+    ::_exit(127);
+  }
+  Child c;
+  rusage use{};
+  REQUIRE(::wait4(pid, &c.status, 0, &use) == pid);
+  c.max_rss_kib = use.ru_maxrss;
+  return c;
+}
+
+void writeText(const std::string& path, const std::string& text) {
+  FILE* f = std::fopen(path.c_str(), "w");
+  REQUIRE(f != nullptr);
+  std::fputs(text.c_str(), f);
+  std::fclose(f);
+}
+
+}  // namespace
+
+TEST_CASE("Outputs: an empty 160 m arena maps in bounded memory (issue 16)", "[settings]") {
+  // Was 1.5 GB (a dense free-space grid of the whole arena) and 4 GB before the picture's size
+  // limit. Now: the free-space tiles the whiskers reached, plus the picture at its 8192-pixel
+  // limit (256 MiB of RGBA): under 400 MB.
+  TempDir dir;
+  const std::string scene = dir.file("hall.json");
+  writeText(scene, R"({"arena": {"width": 160, "depth": 160}, "tables": []})");
+  const Child c = runMeasured({"--sim", "--scene", scene, "--out", dir.file("out")});
+  CHECK(WIFEXITED(c.status));
+  CHECK(WEXITSTATUS(c.status) == 0);
+  CHECK(c.max_rss_kib < 400 * 1024);
+  CHECK(std::filesystem::exists(dir.file("out/map.png")));
+}
+
+TEST_CASE("Outputs: a run removes the temporaries a killed run left, not a live run's (issue 16)",
+          "[settings]") {
+  TempDir dir;
+  const std::string out = dir.file("out");
+  std::filesystem::create_directories(out);
+  const pid_t gone = ::fork();
+  REQUIRE(gone >= 0);
+  if (gone == 0) ::_exit(0);
+  REQUIRE(::waitpid(gone, nullptr, 0) == gone);
+  const std::string stale = out + "/map.png.tmp." + std::to_string(gone) + ".Ab12Cd";
+  const std::string live = out + "/map.png.tmp." + std::to_string(::getpid()) + ".Ab12Cd";
+  writeText(stale, "half a picture");
+  writeText(live, "another run's picture in progress");
+  const Run r = run("--sim --out " + out);
+  INFO(r.output);
+  CHECK(r.exit_code == 0);
+  CHECK_FALSE(std::filesystem::exists(stale));
+  CHECK(std::filesystem::exists(live));
+  CHECK(std::filesystem::exists(out + "/map.json"));
+}
+
+TEST_CASE("Outputs: SIGTERM during a --sim run leaves nothing (issue 16)", "[settings]") {
+  TempDir dir;
+  const std::string out = dir.file("out");
+  // --json progress on stdout: the first pose line says the run is under way.
+  int to_child[2];
+  REQUIRE(::pipe(to_child) == 0);
+  const pid_t pid = ::fork();
+  REQUIRE(pid >= 0);
+  if (pid == 0) {
+    ::dup2(to_child[1], 1);
+    ::close(to_child[0]);
+    ::close(to_child[1]);
+    std::freopen("/dev/null", "w", stderr);
+    ::execl(CRUNCHHOST, CRUNCHHOST, "--sim", "--json", "--out", out.c_str(), nullptr);
+    ::_exit(127);
+  }
+  ::close(to_child[1]);
+  FILE* progress = ::fdopen(to_child[0], "r");
+  REQUIRE(progress != nullptr);
+  char line[512];
+  REQUIRE(std::fgets(line, sizeof line, progress) != nullptr);  // a progress event: mid-run
+  REQUIRE(::kill(pid, SIGTERM) == 0);
+  int status = 0;
+  REQUIRE(::waitpid(pid, &status, 0) == pid);
+  std::fclose(progress);
+  CHECK(WIFSIGNALED(status));
+  CHECK(WTERMSIG(status) == SIGTERM);
+  // Nothing: no outputs, no temporaries (the directory is made only when the outputs are).
+  const bool empty = !std::filesystem::exists(out) || std::filesystem::is_empty(out);
+  CHECK(empty);
 }

@@ -138,3 +138,26 @@ TEST_CASE("FreeSpace: counts saturate at 65535 and the look-up follows them", "[
   CHECK(g.countAt(-1, 0) == 0);
   CHECK(g.countAt(0, 10) == 0);
 }
+
+TEST_CASE("FreeSpace: memory follows the rays, not the arena (issue 16)", "[mapping]") {
+  // The largest arena a scene may have (200 m a side, 4e8 cells): no tile until a ray arrives.
+  FreeSpaceGrid g({-100, -100}, {100, 100}, 0.01);
+  CHECK(g.tileBytes() == 0);
+  CHECK(g.maxInSquare({50, 50, 0.3}, 0.05, 0.0) == 0);
+  // A 1 m ray crosses 100 cells: 2 or 3 tiles of 64 x 64 cells, with their -x/-y neighbours
+  // where a window starting there reaches the ray.
+  g.addRay({{10.0, 10.0}, {11.0, 10.3}});
+  const size_t tile_bytes = 3 * 64 * 64 * sizeof(uint16_t);
+  CHECK(g.tileBytes() >= 2 * tile_bytes);
+  CHECK(g.tileBytes() <= 8 * tile_bytes);
+  CHECK(g.maxInSquare({10.5, 10.15, 0.3}, 0.05, 0.0) == 1);
+  CHECK(g.maxInSquare({-10.5, 10.15, 0.3}, 0.05, 0.0) == 0);
+  // A ray across a tile corner: the windows in the neighbouring tiles see it too (cell
+  // (6399, 6399) is the last of its tile; the window of side 4 at (6397, 6397) holds (6400, 6400)).
+  FreeSpaceGrid h({0, 0}, {100, 100}, 0.01);
+  passCell(h, 6400, 6400, 2);
+  CHECK(h.maxInSquare({63.995, 63.995, 0.0}, 0.04, 0.0) == 2);
+  CHECK(h.maxInSquare({63.995, 63.995, 0.0}, 0.04, 0.0) ==
+        test::scanMaxInSquare(h, {63.995, 63.995, 0.0}, 0.04, 0.0));
+  CHECK(h.maxInSquare({63.975, 63.975, 0.0}, 0.02, 0.0) == 0);
+}

@@ -1,6 +1,8 @@
 #include "crunch/core/atomic_file.h"
 
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -198,4 +200,86 @@ TEST_CASE("AtomicFile: two writers of the same target never collide", "[core]") 
   CHECK(std::count(failures.begin(), failures.end(), 0) == kThreads);
   CHECK(std::find(contents.begin(), contents.end(), slurp(target)) != contents.end());
   CHECK(d.names() == std::vector<std::string>{"shared.txt"});
+}
+
+TEST_CASE("OutputSet: the files appear together at publish, not before", "[core]") {
+  ScratchDir d;
+  spit(d.at("b.txt"), "old b");
+  OutputSet set;
+  auto a = set.add(d.at("a.txt"));
+  REQUIRE(a);
+  REQUIRE(a.value()->write("new a"));
+  auto b = set.add(d.at("b.txt"));
+  REQUIRE(b);
+  REQUIRE(b.value()->write("new b"));
+  // Staged: the targets are as they were, the temporaries carry the pid.
+  CHECK_FALSE(fs::exists(d.at("a.txt")));
+  CHECK(slurp(d.at("b.txt")) == "old b");
+  const std::string pid_part = ".tmp." + std::to_string(::getpid()) + ".";
+  CHECK(contains(a.value()->tempPath(), pid_part));
+  REQUIRE(set.publish());
+  CHECK(slurp(d.at("a.txt")) == "new a");
+  CHECK(slurp(d.at("b.txt")) == "new b");
+  CHECK(d.names() == std::vector<std::string>{"a.txt", "b.txt"});
+}
+
+TEST_CASE("OutputSet: an error before publish leaves no output and no temporary", "[core]") {
+  ScratchDir d;
+  spit(d.at("a.txt"), "old a");
+  {
+    OutputSet set;
+    auto a = set.add(d.at("a.txt"));
+    REQUIRE(a);
+    REQUIRE(a.value()->write("new a"));
+    // The second output cannot be made (its directory is missing): the caller gives up.
+    auto b = set.add(d.at("missing/b.txt"));
+    CHECK_FALSE(b);
+  }
+  CHECK(slurp(d.at("a.txt")) == "old a");
+  CHECK(d.names() == std::vector<std::string>{"a.txt"});
+}
+
+TEST_CASE("removeTempsOnSignals: SIGTERM mid-write removes the temporaries, then kills", "[core]") {
+  ScratchDir d;
+  int ready[2];
+  REQUIRE(::pipe(ready) == 0);
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    removeTempsOnSignals();
+    OutputSet set;
+    auto a = set.add(d.at("map.json"));
+    auto b = set.add(d.at("map.png"));
+    if (!a || !b || !a.value()->write("half")) ::_exit(10);
+    (void)!::write(ready[1], "x", 1);  // the temporaries exist: kill me now
+    for (;;) ::pause();
+  }
+  ::close(ready[1]);
+  char c;
+  REQUIRE(::read(ready[0], &c, 1) == 1);
+  ::close(ready[0]);
+  CHECK(d.names().size() == 2);  // the two temporaries
+  REQUIRE(::kill(child, SIGTERM) == 0);
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  CHECK(WIFSIGNALED(status));
+  CHECK(WTERMSIG(status) == SIGTERM);  // it still dies of the signal
+  CHECK(d.names().empty());
+}
+
+TEST_CASE("removeStaleTemps: a dead process's temporaries go, a live one's stay", "[core]") {
+  ScratchDir d;
+  // A pid that no longer runs: a child that has exited and been reaped.
+  const pid_t gone = ::fork();
+  REQUIRE(gone >= 0);
+  if (gone == 0) ::_exit(0);
+  REQUIRE(::waitpid(gone, nullptr, 0) == gone);
+  const std::string dead = "map.png.tmp." + std::to_string(gone) + ".AbC123";
+  const std::string live = "map.png.tmp." + std::to_string(::getppid()) + ".XyZ789";
+  const std::string other = "notes.txt.tmp." + std::to_string(gone) + ".AbC123";
+  for (const auto& n : {dead, live, other, std::string("map.png")}) spit(d.at(n), "x");
+  CHECK(removeStaleTemps(d.dir.string(), {"map.json", "map.png"}) == 1);
+  std::vector<std::string> want{live, "map.png", other};
+  std::sort(want.begin(), want.end());
+  CHECK(d.names() == want);
 }

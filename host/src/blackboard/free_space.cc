@@ -38,11 +38,25 @@ void clampLinear(double a, double b, double bound, double& lo, double& hi) {
 
 }  // namespace
 
+// Read-only zeros shared by every grid: a tile no ray reached (in .rodata: a write would fault).
+const FreeSpaceGrid::Tile FreeSpaceGrid::kZeroTile = {};
+
 FreeSpaceGrid::FreeSpaceGrid(const Vec2& lo, const Vec2& hi, double cell) : lo_(lo), cell_(cell) {
   nx_ = std::max(1, static_cast<int>(std::ceil((hi.x() - lo.x()) / cell)));
   ny_ = std::max(1, static_cast<int>(std::ceil((hi.y() - lo.y()) / cell)));
-  counts_.assign(static_cast<size_t>(nx_) * static_cast<size_t>(ny_), 0);
-  for (std::vector<uint16_t>& w : windows_) w.assign(counts_.size(), 0);
+  tiles_x_ = (nx_ + kTile - 1) / kTile;
+  const int tiles_y = (ny_ + kTile - 1) / kTile;
+  tiles_.assign(static_cast<size_t>(tiles_x_) * static_cast<size_t>(tiles_y), kZeroTile.v);
+}
+
+uint16_t& FreeSpaceGrid::slot(int plane, int ix, int iy) {
+  const uint16_t*& tile = tiles_[tileOf(ix, iy)];
+  if (tile == kZeroTile.v) {
+    owned_.push_back(std::make_unique<Tile>());  // value-initialised: zeros
+    tile = owned_.back()->v;
+  }
+  // Not the shared zero tile, so one of owned_'s: writable.
+  return const_cast<uint16_t*>(tile)[inTile(plane, ix, iy)];
 }
 
 bool FreeSpaceGrid::index(const Vec2& p, int& ix, int& iy) const {
@@ -65,11 +79,9 @@ void FreeSpaceGrid::addRay(const FreeRay& ray) {
     if (!index(p, ix, iy) || (ix == last_x && iy == last_y)) continue;
     last_x = ix;
     last_y = iy;
-    uint16_t& c = counts_[at(ix, iy)];
-    if (c < std::numeric_limits<uint16_t>::max()) {
-      ++c;
-      raise(ix, iy, c);
-    }
+    if (value(0, ix, iy) == std::numeric_limits<uint16_t>::max()) continue;
+    const uint16_t c = ++slot(0, ix, iy);
+    raise(ix, iy, c);
   }
 }
 
@@ -79,13 +91,11 @@ void FreeSpaceGrid::raise(int ix, int iy, uint16_t v) {
   // raising, none of the larger ones does either.
   for (int j = 1; j <= kLevels; ++j) {
     const int s = 1 << j;
-    std::vector<uint16_t>& w = windows_[static_cast<size_t>(j - 1)];
     bool raised = false;
     for (int y = std::max(0, iy - s + 1); y <= iy; ++y) {
-      uint16_t* row = w.data() + at(0, y);
       for (int x = std::max(0, ix - s + 1); x <= ix; ++x) {
-        if (row[x] < v) {
-          row[x] = v;
+        if (value(j, x, y) < v) {
+          slot(j, x, y) = v;
           raised = true;
         }
       }
@@ -97,12 +107,12 @@ void FreeSpaceGrid::raise(int ix, int iy, uint16_t v) {
 int FreeSpaceGrid::count(const Vec2& p) const {
   int ix, iy;
   if (!index(p, ix, iy)) return 0;
-  return counts_[at(ix, iy)];
+  return value(0, ix, iy);
 }
 
 int FreeSpaceGrid::countAt(int ix, int iy) const {
   if (ix < 0 || iy < 0 || ix >= nx_ || iy >= ny_) return 0;
-  return counts_[at(ix, iy)];
+  return value(0, ix, iy);
 }
 
 int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
@@ -112,13 +122,12 @@ int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
   const int shorter = std::min(x1 - x0, y1 - y0) + 1;
   const int j = std::min(kLevels, static_cast<int>(std::bit_width(static_cast<unsigned>(shorter))) - 1);
   const int s = 1 << j;
-  const uint16_t* w = j == 0 ? counts_.data() : windows_[static_cast<size_t>(j - 1)].data();
   int best = 0;
   for (int y = y0;; y += s) {
     const int wy = std::min(y, y1 - s + 1);
     for (int x = x0;; x += s) {
       const int wx = std::min(x, x1 - s + 1);
-      best = std::max<int>(best, w[at(wx, wy)]);
+      best = std::max<int>(best, value(j, wx, wy));
       if (wx + s > x1) break;
     }
     if (wy + s > y1) break;
@@ -171,13 +180,13 @@ int FreeSpaceGrid::scanCore(const Pose2& pose, double h, int x0, int y0, int x1,
     if (!(dlo <= dhi)) continue;
     int ix0, ix1;
     cellRange(pose.x + dlo, pose.x + dhi, lo_.x(), cell_, x0, x1, ix0, ix1);
-    const uint16_t* row = counts_.data() + at(0, iy);
     for (int ix = ix0; ix <= ix1; ++ix) {
-      if (row[ix] <= best) continue;
+      const int n = value(0, ix, iy);
+      if (n <= best) continue;
       const double dx = (lo_.x() + (ix + 0.5) * cell_) - pose.x;
       const double qx = c * dx + s * dy, qy = -s * dx + c * dy;
       if (std::abs(qx) > h || std::abs(qy) > h) continue;
-      best = row[ix];
+      best = n;
       if (best == upper) return best;
     }
   }

@@ -742,10 +742,11 @@ Error cairoError(const std::string& path, cairo_status_t status) {
   return pictureError(path, cairo_status_to_string(status));
 }
 
-// Draws with `draw(cairo_t*)` on a canvas-sized image and writes it to `path` as a PNG through
-// an AtomicFile: the one PNG writer of the map and snapshot pictures.
+// Draws with `draw(cairo_t*)` on a canvas-sized image and writes it as a PNG into `file`'s
+// temporary (committed by the caller): the one PNG writer of the map and snapshot pictures.
 template <typename Draw>
-Status writePng(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
+Status writePng(const MapCanvas& canvas, AtomicFile& file, Draw&& draw) {
+  const std::string& path = file.target();
   SurfacePtr surface = makeImageSurface(canvas.widthPx(), canvas.heightPx());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
@@ -758,24 +759,20 @@ Status writePng(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
     }
   }
   cairo_surface_flush(surface.get());
-  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
-  if (!file) return file.error();
-  if (cairo_status_t st =
-          cairo_surface_write_to_png(surface.get(), file.value().tempPath().c_str());
+  if (cairo_status_t st = cairo_surface_write_to_png(surface.get(), file.tempPath().c_str());
       st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
-  return file.value().commit();
+  return okStatus();
 }
 
-// The same as an SVG document written straight into the AtomicFile's temporary file.
+// The same as an SVG document written straight into `file`'s temporary. The surface (which
+// holds the temporary open) is gone before this returns, so a caller's discard closes nothing
+// under it.
 template <typename Draw>
-Status writeSvg(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
-  // Declared before the surface so the surface (which holds the open temp file) is destroyed,
-  // closing the file, before the temp is removed on a failure path.
-  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
-  if (!file) return file.error();
-  SurfacePtr surface = makeSvgSurface(file.value().tempPath(), canvas.widthPx(), canvas.heightPx());
+Status writeSvg(const MapCanvas& canvas, AtomicFile& file, Draw&& draw) {
+  const std::string& path = file.target();
+  SurfacePtr surface = makeSvgSurface(file.tempPath(), canvas.widthPx(), canvas.heightPx());
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
@@ -790,47 +787,81 @@ Status writeSvg(const MapCanvas& canvas, const std::string& path, Draw&& draw) {
   if (cairo_status_t st = cairo_surface_status(surface.get()); st != CAIRO_STATUS_SUCCESS) {
     return cairoError(path, st);
   }
+  return okStatus();
+}
+
+// `write(file)` into a new AtomicFile at `path`, committed when it succeeds.
+template <typename Write>
+Status writeCommitted(const std::string& path, Write&& write) {
+  Result<AtomicFile> file = AtomicFile::create(path, pictureFileError);
+  if (!file) return file.error();
+  if (Status s = write(file.value()); !s) return s;
   return file.value().commit();
 }
 
 }  // namespace
 
-Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
+Status renderMapPng(const Map& map, const Scene& truth, AtomicFile& into,
                     const RenderOptions& options) {
-  auto fitted = canvasFor(truth, path, options);
+  auto fitted = canvasFor(truth, into.target(), options);
   if (!fitted) return fitted.error();
   const MapCanvas& canvas = fitted.value();
-  return writePng(canvas, path,
+  return writePng(canvas, into,
                   [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
+}
+
+Status renderMapSvg(const Map& map, const Scene& truth, AtomicFile& into,
+                    const RenderOptions& options) {
+  auto fitted = canvasFor(truth, into.target(), options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
+  return writeSvg(canvas, into,
+                  [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
+}
+
+Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth, AtomicFile& into,
+                         double pixels_per_metre) {
+  RenderOptions options;
+  options.pixels_per_metre = pixels_per_metre;
+  auto fitted = canvasFor(truth, into.target(), options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
+  return writePng(canvas, into, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
+}
+
+Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth, AtomicFile& into,
+                         double pixels_per_metre) {
+  RenderOptions options;
+  options.pixels_per_metre = pixels_per_metre;
+  auto fitted = canvasFor(truth, into.target(), options);
+  if (!fitted) return fitted.error();
+  const MapCanvas& canvas = fitted.value();
+  return writeSvg(canvas, into, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
+}
+
+Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
+                    const RenderOptions& options) {
+  // The options are checked before a temporary is made, as before.
+  if (auto fitted = canvasFor(truth, path, options); !fitted) return fitted.error();
+  return writeCommitted(path, [&](AtomicFile& f) { return renderMapPng(map, truth, f, options); });
 }
 
 Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
                     const RenderOptions& options) {
-  auto fitted = canvasFor(truth, path, options);
-  if (!fitted) return fitted.error();
-  const MapCanvas& canvas = fitted.value();
-  return writeSvg(canvas, path,
-                  [&](cairo_t* cr) { drawPicture(cr, canvas, map, truth, options); });
+  if (auto fitted = canvasFor(truth, path, options); !fitted) return fitted.error();
+  return writeCommitted(path, [&](AtomicFile& f) { return renderMapSvg(map, truth, f, options); });
 }
 
 Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre) {
-  RenderOptions options;
-  options.pixels_per_metre = pixels_per_metre;
-  auto fitted = canvasFor(truth, path, options);
-  if (!fitted) return fitted.error();
-  const MapCanvas& canvas = fitted.value();
-  return writePng(canvas, path, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
+  return writeCommitted(
+      path, [&](AtomicFile& f) { return renderSnapshotPng(snap, truth, f, pixels_per_metre); });
 }
 
 Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre) {
-  RenderOptions options;
-  options.pixels_per_metre = pixels_per_metre;
-  auto fitted = canvasFor(truth, path, options);
-  if (!fitted) return fitted.error();
-  const MapCanvas& canvas = fitted.value();
-  return writeSvg(canvas, path, [&](cairo_t* cr) { drawSnapshot(cr, canvas, snap, truth); });
+  return writeCommitted(
+      path, [&](AtomicFile& f) { return renderSnapshotSvg(snap, truth, f, pixels_per_metre); });
 }
 
 }  // namespace crunch

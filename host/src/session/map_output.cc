@@ -13,8 +13,9 @@ namespace crunch::session {
 
 using json = nlohmann::json;
 
-Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out_dir,
-                     const std::string& title, const exploration::ExplorationReport* exploration) {
+Status stageMapFiles(OutputSet& outputs, const Map& map, const Vec2& area_hi,
+                     const std::string& out_dir, const std::string& title,
+                     const exploration::ExplorationReport* exploration) {
   if (auto st = ensureDirectory(out_dir); !st) return st;
   Scene area;  // the "truth" drawn is only the mapped area
   area.width = area_hi.x();
@@ -23,8 +24,19 @@ Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out
   RenderOptions ropt;
   ropt.title = title;
   ropt.exploration = exploration;
-  if (auto st = writeFileAtomic(out_dir + "/map.json", mapToJson(map)); !st) return st;
-  return renderMapPng(map, area, out_dir + "/map.png", ropt);
+  auto json_file = outputs.add(out_dir + "/map.json");
+  if (!json_file) return json_file.error();
+  if (auto st = json_file.value()->write(mapToJson(map)); !st) return st;
+  auto png_file = outputs.add(out_dir + "/map.png");
+  if (!png_file) return png_file.error();
+  return renderMapPng(map, area, *png_file.value(), ropt);
+}
+
+Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out_dir,
+                     const std::string& title, const exploration::ExplorationReport* exploration) {
+  OutputSet outputs;
+  if (auto st = stageMapFiles(outputs, map, area_hi, out_dir, title, exploration); !st) return st;
+  return outputs.publish();
 }
 
 std::string sessionReportJson(const RobotSession& session, const Map& map) {

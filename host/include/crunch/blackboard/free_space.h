@@ -23,14 +23,20 @@
 // the scan's own arithmetic; test/blackboard/free_space_test.cc checks it against the scan,
 // which is kept as the reference in test/blackboard/free_space_scan.h).
 //
-// Memory: 3 x 2 bytes per cell (the counts and two window levels): 1 MB for the 4 x 4 m arena,
-// 24 MB for a 20 x 20 m floor.
+// Memory (issue 16): bounded by where the whiskers swept, not by the arena's area. The cells
+// are stored in tiles of 64 x 64 (0.64 m a side at 1 cm), each 24 KB (3 x 2 bytes per cell: the
+// counts and two window levels), made when a ray first raises a cell or window in it; a tile
+// no ray reached is read as zeros from one shared, never-written tile. The directory costs 8
+// bytes per tile of the arena: 200 KB for the largest arena a scene may have (200 x 200 m,
+// scene.h's kMaxArenaSide). So an empty 160 m arena costs 0.1 MB instead of 1.5 GB, and a
+// robot that sweeps a 2 m wide corridor through it pays for the corridor's tiles only.
 // Thread-safety: const methods may run concurrently (they read only); addRay() must not run
-// beside any other call. Allocation: the constructor only; addRay() and queries never allocate.
+// beside any other call. Allocation: the constructor (the directory) and addRay() (a tile the
+// first time a ray reaches it); queries never allocate, so the sampler's sweep does not.
 #pragma once
 
-#include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -65,15 +71,35 @@ class FreeSpaceGrid {
   int cellsX() const { return nx_; }
   int cellsY() const { return ny_; }
   int countAt(int ix, int iy) const;
+  // Bytes held by the tiles made so far (the directory not counted).
+  size_t tileBytes() const { return owned_.size() * sizeof(Tile); }
 
  private:
   // Window sides 2^1 .. 2^kLevels cells.
   static constexpr int kLevels = 2;
+  // A tile is kTile x kTile cells: plane 0 the counts; plane j (1..kLevels) at a cell holds the
+  // largest count in the 2^j x 2^j cells from it towards +x +y (clipped at the grid's edge).
+  static constexpr int kTileBits = 6;
+  static constexpr int kTile = 1 << kTileBits;
+  static constexpr size_t kPlane = static_cast<size_t>(kTile) * kTile;
+  struct Tile {
+    uint16_t v[(kLevels + 1) * kPlane];
+  };
+  static const Tile kZeroTile;
 
   bool index(const Vec2& p, int& ix, int& iy) const;
-  size_t at(int ix, int iy) const {
-    return static_cast<size_t>(iy) * static_cast<size_t>(nx_) + static_cast<size_t>(ix);
+  size_t tileOf(int ix, int iy) const {
+    return static_cast<size_t>(iy >> kTileBits) * static_cast<size_t>(tiles_x_) +
+           static_cast<size_t>(ix >> kTileBits);
   }
+  static size_t inTile(int plane, int ix, int iy) {
+    return static_cast<size_t>(plane) * kPlane +
+           static_cast<size_t>(((iy & (kTile - 1)) << kTileBits) | (ix & (kTile - 1)));
+  }
+  // Plane `plane` (0 counts, j windows of side 2^j) at cell (ix, iy), inside the grid.
+  uint16_t value(int plane, int ix, int iy) const { return tiles_[tileOf(ix, iy)][inTile(plane, ix, iy)]; }
+  // The same, writable: makes the cell's tile if no ray reached it yet.
+  uint16_t& slot(int plane, int ix, int iy);
   // Cell (ix, iy) now holds v: raises every window containing it to at least v.
   void raise(int ix, int iy, uint16_t v);
   // The largest count in the cells [x0, x1] x [y0, y1] (inside the grid, not empty).
@@ -85,10 +111,11 @@ class FreeSpaceGrid {
   Vec2 lo_;
   double cell_;
   int nx_ = 0, ny_ = 0;
-  std::vector<uint16_t> counts_;
-  // windows_[j - 1][at(ix, iy)]: the largest count in the 2^j x 2^j cells from (ix, iy) towards
-  // +x +y (clipped at the grid's edge).
-  std::array<std::vector<uint16_t>, kLevels> windows_;
+  int tiles_x_ = 0;
+  // tiles_[tileOf(ix, iy)]: the cell's tile, or the shared zero tile if no ray reached it.
+  std::vector<const uint16_t*> tiles_;
+  // The tiles made so far (tiles_ points into them).
+  std::vector<std::unique_ptr<Tile>> owned_;
   long long rays_ = 0;
 };
 

@@ -5,8 +5,10 @@
 #pragma once
 
 #include <initializer_list>
+#include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "crunch/core/result.h"
 
@@ -15,9 +17,12 @@ namespace crunch {
 // A temporary file beside `target`, renamed over it by commit(); removed by the destructor
 // when not committed, so no failure path leaves a temporary behind or touches the target.
 //
-// The temporary is "<target>.tmp.XXXXXX" made by mkstemp, so several writers aiming at the same
-// target (threads or processes) never share one; the last commit wins, whole. Its mode is 0644
-// (best effort: some file systems refuse chmod, and the content is what matters).
+// The temporary is "<target>.tmp.<pid>.XXXXXX" made by mkstemp, so several writers aiming at the
+// same target (threads or processes) never share one; the last commit wins, whole. Its mode is
+// 0644 (best effort: some file systems refuse chmod, and the content is what matters). The pid
+// in the name lets a later run remove what a killed one left (removeStaleTemps), and every
+// temporary alive in the process is removed by a SIGINT/SIGTERM/SIGHUP once
+// removeTempsOnSignals() is installed.
 //
 // Write the content either with write() or, for a library that wants a file name (Cairo), to
 // tempPath(): truncating and rewriting that file is fine, the object's own descriptor stays on
@@ -48,8 +53,14 @@ class AtomicFile {
 
   // fsyncs and closes the temporary, renames it over the target, then fsyncs the directory
   // (best effort: the new file is already in place, and some file systems refuse). On failure
-  // the temporary is removed and the target is untouched. Call at most once.
+  // the temporary is removed and the target is untouched. Call at most once. The same as
+  // seal() then publish().
   Status commit();
+
+  // commit()'s two halves, for OutputSet: seal() makes the temporary complete and durable
+  // (fsync, close; no more write()); publish() renames a sealed temporary over the target.
+  Status seal();
+  Status publish();
 
  private:
   AtomicFile(std::string target, std::string temp, int fd, ErrorMessage message);
@@ -59,9 +70,40 @@ class AtomicFile {
 
   std::string target_;
   std::string temp_;  // empty once committed or discarded
-  int fd_ = -1;
+  int fd_ = -1;       // -1 once sealed
   ErrorMessage message_ = nullptr;
+  int live_slot_ = -1;  // the temporary's entry for the signal handler, -1 if none
 };
+
+// All-or-nothing outputs (issue 16): a run's files are each written to an AtomicFile's
+// temporary first, and publish() renames them over their targets only once every one of them
+// is complete and synced. An error before that, the OutputSet's destruction, or a signal (with
+// removeTempsOnSignals) leaves no output and no temporary, and any old outputs untouched. The
+// renames themselves take microseconds; a kill -9 inside them is the one way to see some files
+// new and some old.
+class OutputSet {
+ public:
+  // A new AtomicFile for `path` to write into (write() or tempPath()), owned by the set.
+  Result<AtomicFile*> add(const std::string& path, AtomicFile::ErrorMessage message = nullptr);
+  // Seals every file, then renames each over its target. On a failure while sealing nothing is
+  // published and every temporary is removed. Call at most once.
+  Status publish();
+  size_t size() const { return files_.size(); }
+
+ private:
+  std::vector<std::unique_ptr<AtomicFile>> files_;
+};
+
+// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove every AtomicFile temporary alive
+// in the process, then die of the signal as before (the default action, re-raised). A handler
+// installed later over it (crunchhost --robot's StopSignals) takes precedence while it lives.
+// Async-signal-safe: the handler only reads a fixed table and calls unlink().
+void removeTempsOnSignals();
+
+// Removes "<dir>/<name>.tmp.<pid>.*" left by a process that no longer runs (a kill -9, a power
+// cut), for each of `names`; a live process's temporaries are left alone. Returns how many were
+// removed. Best effort: what cannot be removed is left.
+int removeStaleTemps(const std::string& dir, std::initializer_list<const char*> names);
 
 // Writes `contents` to `path` through an AtomicFile. On failure `path` is untouched (old
 // content or absent), no temporary is left, and the Error reads

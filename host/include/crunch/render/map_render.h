@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "crunch/core/atomic_file.h"
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
 #include "crunch/exploration/exploration.h"
@@ -78,6 +79,13 @@ Status renderMapPng(const Map& map, const Scene& truth, const std::string& path,
 Status renderMapSvg(const Map& map, const Scene& truth, const std::string& path,
                     const RenderOptions& options = {});
 
+// The same two pictures written into `into`'s temporary, for an OutputSet to publish with the
+// run's other outputs (atomic_file.h); `into.target()` is the path errors name. Not committed.
+Status renderMapPng(const Map& map, const Scene& truth, AtomicFile& into,
+                    const RenderOptions& options = {});
+Status renderMapSvg(const Map& map, const Scene& truth, AtomicFile& into,
+                    const RenderOptions& options = {});
+
 // ---- Blackboard snapshots (paper Figs. 3 and 4) -------------------------------------------------
 // The blackboard at one pose: every live table hypothesis as a wire-frame rectangle (its top and
 // four legs, magenta), every live leg hypothesis as a wire-frame square (green), the shapelets of
@@ -112,5 +120,9 @@ Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre = 200);
 Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth,
                          const std::string& path, double pixels_per_metre = 200);
+Status renderSnapshotPng(const BlackboardSnapshot& snap, const Scene& truth, AtomicFile& into,
+                         double pixels_per_metre = 200);
+Status renderSnapshotSvg(const BlackboardSnapshot& snap, const Scene& truth, AtomicFile& into,
+                         double pixels_per_metre = 200);
 
 }  // namespace crunch

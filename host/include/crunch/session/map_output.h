@@ -22,6 +22,7 @@
 #include <string>
 #include <thread>
 
+#include "crunch/core/atomic_file.h"  // OutputSet
 #include "crunch/core/result.h"
 #include "crunch/exploration/exploration.h"
 #include "crunch/mapping/fused_map.h"
@@ -29,9 +30,14 @@
 
 namespace crunch::session {
 
-// OUT/map.json, then OUT/map.png (the mapped area [0, area_hi] — RobotSessionOptions::area_hi
-// — drawn as the "truth", titled `title`), each complete or not at all; creates `out_dir` if
-// needed. The first Error.
+// OUT/map.json and OUT/map.png (the mapped area [0, area_hi] — RobotSessionOptions::area_hi
+// — drawn as the "truth", titled `title`), written into `outputs` (atomic_file.h) to be
+// published with the caller's other files; creates `out_dir` if needed. The first Error.
+Status stageMapFiles(OutputSet& outputs, const Map& map, const Vec2& area_hi,
+                     const std::string& out_dir, const std::string& title,
+                     const exploration::ExplorationReport* exploration = nullptr);
+
+// The same two files published together: both new, or (on an Error) both as they were.
 Status writeMapFiles(const Map& map, const Vec2& area_hi, const std::string& out_dir,
                      const std::string& title,
                      const exploration::ExplorationReport* exploration = nullptr);
