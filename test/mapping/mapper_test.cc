@@ -558,3 +558,44 @@ TEST_CASE("Mapper::drawSamples: drawing does not change the run's maps", "[mappi
     requireSameMap(drawing.finish(), expected);
   }
 }
+
+TEST_CASE("sweptLayer: the swept cells over their bounding box, empty without rays",
+          "[mapping]") {
+  crunch::FreeSpaceGrid grid({0.0, 0.0}, {4.0, 4.0});
+  CHECK(crunch::sweptLayer(grid).empty());
+  grid.addRay({{1.005, 2.005}, {1.505, 2.005}});  // row 200, cells 100..150
+  grid.addRay({{3.005, 0.505}, {3.005, 0.705}});  // column 300, rows 50..70
+  const crunch::FreeSpaceLayer f = crunch::sweptLayer(grid);
+  REQUIRE_FALSE(f.empty());
+  CHECK(f.cell == 0.01);
+  CHECK(f.origin.x() == Approx(1.0));
+  CHECK(f.origin.y() == Approx(0.5));
+  CHECK(f.nx == 201);  // cells 100..300
+  CHECK(f.ny == 151);  // rows 50..200
+  long swept = 0;
+  for (int iy = 0; iy < f.ny; ++iy) {
+    for (int ix = 0; ix < f.nx; ++ix) {
+      CHECK(f.at(ix, iy) == (grid.countAt(ix + 100, iy + 50) > 0));
+      swept += f.at(ix, iy) ? 1 : 0;
+    }
+  }
+  CHECK(swept == 51 + 21);
+}
+
+TEST_CASE("sweptLayer: a large swept extent is written in blocks within the cell bound",
+          "[mapping]") {
+  crunch::FreeSpaceGrid grid({0.0, 0.0}, {30.0, 30.0});
+  grid.addRay({{0.005, 0.005}, {0.105, 0.005}});      // cells (0..10, 0)
+  grid.addRay({{29.905, 29.995}, {29.995, 29.995}});  // cells (2990..2999, 2999)
+  const crunch::FreeSpaceLayer f = crunch::sweptLayer(grid);
+  // 3000 x 3000 cells is over 2^22: blocks of 2 x 2, 1500 x 1500.
+  CHECK(f.cell == Approx(0.02));
+  CHECK(f.nx == 1500);
+  CHECK(f.ny == 1500);
+  CHECK(static_cast<long long>(f.nx) * f.ny <= crunch::kMaxFreeSpaceLayerCells);
+  CHECK(f.at(0, 0));
+  CHECK(f.at(5, 0));
+  CHECK_FALSE(f.at(6, 0));
+  CHECK(f.at(1499, 1499));
+  CHECK_FALSE(f.at(700, 700));
+}

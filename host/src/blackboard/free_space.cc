@@ -115,6 +115,30 @@ int FreeSpaceGrid::countAt(int ix, int iy) const {
   return value(0, ix, iy);
 }
 
+bool FreeSpaceGrid::sweptBounds(int& x0, int& y0, int& x1, int& y1) const {
+  x0 = y0 = std::numeric_limits<int>::max();
+  x1 = y1 = -1;
+  const int tiles_y = static_cast<int>(tiles_.size()) / std::max(tiles_x_, 1);
+  for (int ty = 0; ty < tiles_y; ++ty) {
+    for (int tx = 0; tx < tiles_x_; ++tx) {
+      const uint16_t* tile = tiles_[static_cast<size_t>(ty) * static_cast<size_t>(tiles_x_) +
+                                    static_cast<size_t>(tx)];
+      if (tile == kZeroTile.v) continue;  // no ray reached it
+      for (int j = 0; j < kTile; ++j) {
+        for (int i = 0; i < kTile; ++i) {
+          if (tile[static_cast<size_t>((j << kTileBits) | i)] == 0) continue;  // plane 0: counts
+          const int ix = (tx << kTileBits) + i, iy = (ty << kTileBits) + j;
+          x0 = std::min(x0, ix);
+          y0 = std::min(y0, iy);
+          x1 = std::max(x1, ix);
+          y1 = std::max(y1, iy);
+        }
+      }
+    }
+  }
+  return x1 >= 0;
+}
+
 int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
   // Windows of the largest side s that fits the box's shorter side, the last one in each
   // direction pulled back to end on the box's edge: 2 x 2 look-ups when the box is at most 2s

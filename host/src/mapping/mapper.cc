@@ -276,16 +276,23 @@ void Mapper::drawSamples(int n, double beta, int sweeps_between, std::vector<Map
 
 FreeSpaceLayer sweptLayer(const FreeSpaceGrid& grid) {
   FreeSpaceLayer f;
-  if (grid.rays() == 0) return f;  // nothing swept: no layer (the file gains no key)
-  f.origin = grid.origin();
-  f.cell = grid.cell();
-  f.nx = grid.cellsX();
-  f.ny = grid.cellsY();
-  f.swept.resize(static_cast<std::size_t>(f.nx) * static_cast<std::size_t>(f.ny));
-  for (int iy = 0; iy < f.ny; ++iy) {
-    for (int ix = 0; ix < f.nx; ++ix) {
-      f.swept[static_cast<std::size_t>(iy) * static_cast<std::size_t>(f.nx) +
-              static_cast<std::size_t>(ix)] = grid.countAt(ix, iy) > 0 ? 1 : 0;
+  int x0, y0, x1, y1;
+  if (!grid.sweptBounds(x0, y0, x1, y1)) return f;  // nothing swept: no layer (no key in the file)
+  // Blocks of k x k grid cells, k the smallest power of two that keeps the layer within
+  // kMaxFreeSpaceLayerCells (1 cm up to about 20 x 20 m of swept floor).
+  const long long w = x1 - x0 + 1, h = y1 - y0 + 1;
+  int k = 1;
+  while (((w + k - 1) / k) * ((h + k - 1) / k) > kMaxFreeSpaceLayerCells) k *= 2;
+  f.cell = grid.cell() * k;
+  f.origin = grid.origin() + Vec2(x0 * grid.cell(), y0 * grid.cell());
+  f.nx = static_cast<int>((w + k - 1) / k);
+  f.ny = static_cast<int>((h + k - 1) / k);
+  f.swept.assign(static_cast<std::size_t>(f.nx) * static_cast<std::size_t>(f.ny), 0);
+  for (int iy = y0; iy <= y1; ++iy) {
+    for (int ix = x0; ix <= x1; ++ix) {
+      if (grid.countAt(ix, iy) == 0) continue;
+      f.swept[static_cast<std::size_t>((iy - y0) / k) * static_cast<std::size_t>(f.nx) +
+              static_cast<std::size_t>((ix - x0) / k)] = 1;
     }
   }
   return f;

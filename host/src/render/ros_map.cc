@@ -216,19 +216,20 @@ Result<RosMapSummary> exportRosMap(const std::string& map_json, const std::strin
   if (!grid) return grid.error();
   if (auto st = checkOutputTargets(out_dir, {"map.pgm", "map.yaml"}); !st) return st.error();
   if (auto st = ensureDirectory(out_dir); !st) return st.error();
+  removeStaleTemps(out_dir, {"map.pgm", "map.yaml"});  // a killed export's leftovers
 
   RosMapSummary sum;
   sum.pgm_path = out_dir + "/map.pgm";
   sum.yaml_path = out_dir + "/map.yaml";
-  // Both files complete in their temporaries before either is renamed into place.
-  auto pgm = AtomicFile::create(sum.pgm_path);
+  // Both files complete and synced before either is renamed into place (OutputSet).
+  OutputSet out;
+  auto pgm = out.add(sum.pgm_path);
   if (!pgm) return pgm.error();
-  auto yaml = AtomicFile::create(sum.yaml_path);
+  auto yaml = out.add(sum.yaml_path);
   if (!yaml) return yaml.error();
-  if (auto st = pgm.value().write(rosMapPgm(grid.value())); !st) return st.error();
-  if (auto st = yaml.value().write(rosMapYaml(grid.value(), "map.pgm")); !st) return st.error();
-  if (auto st = pgm.value().commit(); !st) return st.error();
-  if (auto st = yaml.value().commit(); !st) return st.error();
+  if (auto st = pgm.value()->write(rosMapPgm(grid.value())); !st) return st.error();
+  if (auto st = yaml.value()->write(rosMapYaml(grid.value(), "map.pgm")); !st) return st.error();
+  if (auto st = out.publish(); !st) return st.error();
 
   const RosMapGrid& g = grid.value();
   sum.width = g.width;

@@ -21,7 +21,7 @@ class CsvFile {
  public:
   static constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
 
-  explicit CsvFile(AtomicFile file) : file_(std::move(file)) {}
+  explicit CsvFile(AtomicFile* file) : file_(file) {}
 
   CsvFile& num(double v) {
     sep();
@@ -54,13 +54,9 @@ class CsvFile {
     return flush();
   }
   Status flush() {
-    auto st = file_.write(buf_);
+    auto st = file_->write(buf_);
     buf_.clear();
     return st;
-  }
-  Status commit() {
-    if (auto st = flush(); !st) return st;
-    return file_.commit();
   }
   std::uint64_t rows() const { return rows_; }
 
@@ -69,16 +65,16 @@ class CsvFile {
     if (!first_) buf_ += ',';
     first_ = false;
   }
-  AtomicFile file_;
+  AtomicFile* file_;  // owned by the export's OutputSet
   std::string buf_;
   bool first_ = true;
   std::uint64_t rows_ = 0;
 };
 
-Result<CsvFile> openCsv(const std::string& path, const char* header) {
-  auto f = AtomicFile::create(path);
+Result<CsvFile> openCsv(OutputSet& out, const std::string& path, const char* header) {
+  auto f = out.add(path);
   if (!f) return f.error();
-  CsvFile csv(std::move(f).value());
+  CsvFile csv(f.value());
   csv.text(header);
   if (auto st = csv.end(); !st) return st.error();
   return csv;
@@ -113,15 +109,17 @@ Result<RecordingCsvSummary> exportRecordingCsv(const std::string& recording,
     return st.error();
   }
   if (auto st = ensureDirectory(out_dir); !st) return st.error();
-  auto samples = openCsv(out_dir + "/samples.csv",
+  removeStaleTemps(out_dir, {"samples.csv", "contacts.csv", "odometry.csv"});
+  OutputSet out;
+  auto samples = openCsv(out, out_dir + "/samples.csv",
                          "t_s,t_ns,board,seq,tick,alpha,beta,status,frames_lost,samples_dropped");
   if (!samples) return samples.error();
-  auto contacts = openCsv(out_dir + "/contacts.csv",
+  auto contacts = openCsv(out, out_dir + "/contacts.csv",
                           "t_s,t_ns,whisk,whisker,r_m,phi_rad,oriented,face_span_m,robot_x_m,"
                           "robot_y_m,robot_theta_rad,contact_x_m,contact_y_m");
   if (!contacts) return contacts.error();
   auto odometry =
-      openCsv(out_dir + "/odometry.csv", "t_s,t_ns,x_m,y_m,theta_rad,bumped,packets");
+      openCsv(out, out_dir + "/odometry.csv", "t_s,t_ns,x_m,y_m,theta_rad,bumped,packets");
   if (!odometry) return odometry.error();
   CsvFile& s_csv = samples.value();
   CsvFile& c_csv = contacts.value();
@@ -199,8 +197,9 @@ Result<RecordingCsvSummary> exportRecordingCsv(const std::string& recording,
   sum.contacts = c_csv.rows() - 1;
   sum.odometry = o_csv.rows() - 1;
   for (CsvFile* f : {&s_csv, &c_csv, &o_csv}) {
-    if (auto st = f->commit(); !st) return st.error();
+    if (auto st = f->flush(); !st) return st.error();
   }
+  if (auto st = out.publish(); !st) return st.error();
   return sum;
 }
 

@@ -71,6 +71,9 @@ class FreeSpaceGrid {
   int cellsX() const { return nx_; }
   int cellsY() const { return ny_; }
   int countAt(int ix, int iy) const;
+  // The smallest box of cells [x0, x1] x [y0, y1] holding every cell a ray passed through;
+  // false when there is none. Reads only the tiles made (the map file's free_space, issue 17).
+  bool sweptBounds(int& x0, int& y0, int& x1, int& y1) const;
   // Bytes held by the tiles made so far (the directory not counted).
   size_t tileBytes() const { return owned_.size() * sizeof(Tile); }
 

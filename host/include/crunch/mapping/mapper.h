@@ -101,9 +101,13 @@ class Mapper {
   std::size_t sample_fed_ = 0;
 };
 
-// The cells of `grid` that at least one free whisker sample passed through (Map::free_space);
-// empty when no ray was added. snapshot(), finish() and inferNow() fill their map's free_space
+// The cells of `grid` that at least one free whisker sample passed through (Map::free_space),
+// over the smallest box holding them; empty when none. A box of more than
+// kMaxFreeSpaceLayerCells grid cells is written in square blocks of 2, 4, ... cells (a block is
+// swept when any of its cells is), so a map file stays small on any floor: 1 cm cells up to about
+// 20 x 20 m of swept floor. snapshot(), finish() and inferNow() fill their map's free_space
 // with it.
+inline constexpr long long kMaxFreeSpaceLayerCells = 1LL << 22;
 FreeSpaceLayer sweptLayer(const FreeSpaceGrid& grid);
 
 // A table of the model's one size at `pose`.

@@ -18,8 +18,8 @@
 // one cell of margin; map.yaml's origin is the pose of its lower-left pixel (x, y, yaw = 0).
 // The PGM's first row is the grid's top row (largest y), as map_server reads it.
 //
-// Thread-safety: free functions on values. Writing goes through core/atomic_file.h: both files are
-// complete or neither is touched.
+// Thread-safety: free functions on values. Writing is one OutputSet (core/atomic_file.h): both
+// files are renamed into place together once both are complete, or neither is touched.
 #pragma once
 
 #include <cstdint>

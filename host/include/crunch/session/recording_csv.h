@@ -17,8 +17,9 @@
 // which a recording cut short never closed, come from the session's finish() with the time of the
 // last record. Numbers are written with enough digits to read back the same double.
 //
-// Thread-safety: none needed. Writing: each file goes through an AtomicFile (core/atomic_file.h)
-// in pieces of 1 MiB; all three are renamed into place only when the whole recording is read.
+// Thread-safety: none needed. Writing: the three files are one OutputSet (core/atomic_file.h),
+// written in pieces of 1 MiB and renamed into place together only when the whole recording is
+// read: an error or a signal before that leaves no output.
 #pragma once
 
 #include <cstdint>
