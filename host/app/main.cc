@@ -284,12 +284,8 @@ int runExportMode(crunch::session::ExportOptions& o, const CLI::App& exp) {
   o.resolution_given = exp.count("--resolution") > 0;
   o.tops_given = exp.count("--tops-occupied") > 0;
   const auto r = crunch::session::runExport(o);
-  if (!r) {
-    std::cerr << "crunchhost export: " << r.error().message << "\n";
-    return 2;
-  }
-  std::cout << "crunchhost export: " << r.value().summary << "\n";
-  return r.value().damaged ? 3 : 0;
+  (r.exit_status == 0 ? std::cout : std::cerr) << "crunchhost export: " << r.summary << "\n";
+  return r.exit_status;
 }
 
 // --replay, --robot or --sim, with the options they share.

@@ -240,6 +240,17 @@ TEST_CASE("Export: bad input is exit 2 naming the flag or file, with nothing wri
     CHECK(said.find(c.named) != std::string::npos);
     CHECK_FALSE(fs::exists(out));
   }
+  // An --out that is a file, or a directory where an output goes: refused before writing.
+  std::ofstream(dir.file("a_file")) << "x";
+  fs::create_directories(dir.file("taken/map.yaml"));
+  for (const std::string& bad_out : {dir.file("a_file"), dir.file("taken")}) {
+    std::string said;
+    INFO(bad_out);
+    CHECK(run(kHost + " export --format ros-map --in " + map + " --out " + bad_out, &said) == 2);
+    INFO(said);
+    CHECK(said.find("--out") != std::string::npos);
+    CHECK_FALSE(fs::exists(dir.file("taken/map.pgm")));
+  }
 }
 
 TEST_CASE("Export: a damaged recording is exported up to the damage, said, exit 3", "[export]") {

@@ -206,7 +206,13 @@ std::string rosMapYaml(const RosMapGrid& grid, const std::string& image) {
 }
 
 Result<RosMapSummary> exportRosMap(const std::string& map_json, const std::string& out_dir,
-                                   const RosMapOptions& options) {
+                                   const RosMapOptions& options, bool* output_failed) {
+  if (output_failed != nullptr) *output_failed = false;
+  // Past the checks, a failure is the output's (a full disk), not the input's.
+  const auto failedWriting = [output_failed](Error e) {
+    if (output_failed != nullptr) *output_failed = true;
+    return e;
+  };
   if (auto st = options.validate(); !st) return st.error();
   auto text = readInputFile(map_json, "map file");
   if (!text) return text.error();
@@ -214,8 +220,10 @@ Result<RosMapSummary> exportRosMap(const std::string& map_json, const std::strin
   if (!map) return map.error();
   auto grid = rasteriseRosMap(map.value(), options);
   if (!grid) return grid.error();
-  if (auto st = checkOutputTargets(out_dir, {"map.pgm", "map.yaml"}); !st) return st.error();
-  if (auto st = ensureDirectory(out_dir); !st) return st.error();
+  if (auto st = checkOutputTargets(out_dir, {"map.pgm", "map.yaml"}); !st) {
+    return Error{"--out " + st.error().message};
+  }
+  if (auto st = ensureDirectory(out_dir); !st) return failedWriting(st.error());
   removeStaleTemps(out_dir, {"map.pgm", "map.yaml"});  // a killed export's leftovers
 
   RosMapSummary sum;
@@ -224,12 +232,14 @@ Result<RosMapSummary> exportRosMap(const std::string& map_json, const std::strin
   // Both files complete and synced before either is renamed into place (OutputSet).
   OutputSet out;
   auto pgm = out.add(sum.pgm_path);
-  if (!pgm) return pgm.error();
+  if (!pgm) return failedWriting(pgm.error());
   auto yaml = out.add(sum.yaml_path);
-  if (!yaml) return yaml.error();
-  if (auto st = pgm.value()->write(rosMapPgm(grid.value())); !st) return st.error();
-  if (auto st = yaml.value()->write(rosMapYaml(grid.value(), "map.pgm")); !st) return st.error();
-  if (auto st = out.publish(); !st) return st.error();
+  if (!yaml) return failedWriting(yaml.error());
+  if (auto st = pgm.value()->write(rosMapPgm(grid.value())); !st) return failedWriting(st.error());
+  if (auto st = yaml.value()->write(rosMapYaml(grid.value(), "map.pgm")); !st) {
+    return failedWriting(st.error());
+  }
+  if (auto st = out.publish(); !st) return failedWriting(st.error());
 
   const RosMapGrid& g = grid.value();
   sum.width = g.width;

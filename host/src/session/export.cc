@@ -23,11 +23,12 @@ Status ExportOptions::validate() const {
   return okStatus();
 }
 
-Result<ExportReport> runExport(const ExportOptions& options) {
-  if (auto st = options.validate(); !st) return st.error();
+ExportReport runExport(const ExportOptions& options) {
+  if (auto st = options.validate(); !st) return ExportReport{st.error().message, 2};
+  bool output_failed = false;
   if (exportFormatByName(options.format).value() == ExportFormat::kRosMap) {
-    auto r = exportRosMap(options.in, options.out_dir, options.ros);
-    if (!r) return r.error();
+    auto r = exportRosMap(options.in, options.out_dir, options.ros, &output_failed);
+    if (!r) return ExportReport{r.error().message, output_failed ? 1 : 2};
     const RosMapSummary& s = r.value();
     std::string msg = "wrote ";
     msg.append(s.pgm_path).append(" and ").append(s.yaml_path).append(": ");
@@ -39,10 +40,10 @@ Result<ExportReport> runExport(const ExportOptions& options) {
       msg.append(" (the map file has no free_space, made before issue 17: no cell is free; "
                  "re-run or --replay to get it)");
     }
-    return ExportReport{msg, false};
+    return ExportReport{msg, 0};
   }
-  auto r = exportRecordingCsv(options.in, options.out_dir);
-  if (!r) return r.error();
+  auto r = exportRecordingCsv(options.in, options.out_dir, &output_failed);
+  if (!r) return ExportReport{r.error().message, output_failed ? 1 : 2};
   const RecordingCsvSummary& s = r.value();
   std::string msg = "wrote ";
   msg.append(options.out_dir).append("/{samples,contacts,odometry}.csv: ");
@@ -50,7 +51,7 @@ Result<ExportReport> runExport(const ExportOptions& options) {
   msg.append(std::to_string(s.contacts)).append(" contact reports, ");
   msg.append(std::to_string(s.odometry)).append(" odometry rows");
   if (!s.damage.empty()) msg.append("; the recording is damaged, exported up to it: ").append(s.damage);
-  return ExportReport{msg, !s.damage.empty()};
+  return ExportReport{msg, s.damage.empty() ? 0 : 3};
 }
 
 }  // namespace crunch::session

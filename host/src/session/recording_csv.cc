@@ -83,7 +83,13 @@ Result<CsvFile> openCsv(OutputSet& out, const std::string& path, const char* hea
 }  // namespace
 
 Result<RecordingCsvSummary> exportRecordingCsv(const std::string& recording,
-                                               const std::string& out_dir) {
+                                               const std::string& out_dir, bool* output_failed) {
+  if (output_failed != nullptr) *output_failed = false;
+  // Past the checks, a failure is the output's (a full disk), not the input's.
+  const auto failedWriting = [output_failed](Error e) {
+    if (output_failed != nullptr) *output_failed = true;
+    return e;
+  };
   // t_s counts from the earliest record: the file's order is the processing order, and a
   // Create chunk can come before bridge bytes that arrived earlier (drained later from the ring).
   std::optional<std::uint64_t> t0;
@@ -106,21 +112,21 @@ Result<RecordingCsvSummary> exportRecordingCsv(const std::string& recording,
   RobotSession& session = *created.value();
 
   if (auto st = checkOutputTargets(out_dir, {"samples.csv", "contacts.csv", "odometry.csv"}); !st) {
-    return st.error();
+    return Error{"--out " + st.error().message};
   }
-  if (auto st = ensureDirectory(out_dir); !st) return st.error();
+  if (auto st = ensureDirectory(out_dir); !st) return failedWriting(st.error());
   removeStaleTemps(out_dir, {"samples.csv", "contacts.csv", "odometry.csv"});
   OutputSet out;
   auto samples = openCsv(out, out_dir + "/samples.csv",
                          "t_s,t_ns,board,seq,tick,alpha,beta,status,frames_lost,samples_dropped");
-  if (!samples) return samples.error();
+  if (!samples) return failedWriting(samples.error());
   auto contacts = openCsv(out, out_dir + "/contacts.csv",
                           "t_s,t_ns,whisk,whisker,r_m,phi_rad,oriented,face_span_m,robot_x_m,"
                           "robot_y_m,robot_theta_rad,contact_x_m,contact_y_m");
-  if (!contacts) return contacts.error();
+  if (!contacts) return failedWriting(contacts.error());
   auto odometry =
       openCsv(out, out_dir + "/odometry.csv", "t_s,t_ns,x_m,y_m,theta_rad,bumped,packets");
-  if (!odometry) return odometry.error();
+  if (!odometry) return failedWriting(odometry.error());
   CsvFile& s_csv = samples.value();
   CsvFile& c_csv = contacts.value();
   CsvFile& o_csv = odometry.value();
@@ -184,22 +190,22 @@ Result<RecordingCsvSummary> exportRecordingCsv(const std::string& recording,
         break;
     }
   }
-  if (!written) return written.error();
+  if (!written) return failedWriting(written.error());
   if (next == io::RecordingReader::Next::kDamaged) sum.damage = rec.damage();
   sum.records = rec.records();
   // The whisk a cut-short recording left open: finish() closes it (and maps, unused here).
   if (t0) {
     (void)session.finish();
     writeContacts(whisk);
-    if (!written) return written.error();
+    if (!written) return failedWriting(written.error());
   }
   sum.samples = s_csv.rows() - 1;  // less the header
   sum.contacts = c_csv.rows() - 1;
   sum.odometry = o_csv.rows() - 1;
   for (CsvFile* f : {&s_csv, &c_csv, &o_csv}) {
-    if (auto st = f->flush(); !st) return st.error();
+    if (auto st = f->flush(); !st) return failedWriting(st.error());
   }
-  if (auto st = out.publish(); !st) return st.error();
+  if (auto st = out.publish(); !st) return failedWriting(st.error());
   return sum;
 }
 

@@ -86,8 +86,11 @@ struct RosMapSummary {
 
 // `crunchhost export --format ros-map`: reads the map file `map_json` (strictly,
 // core/json_input.h), rasterises it and writes DIR/map.pgm and DIR/map.yaml (DIR created if
-// missing). Errors name the file or the flag; on any error neither output file is written.
+// missing). Errors name the file or the flag (a DIR that cannot take the files: "--out ...");
+// on any error neither output file is written. `output_failed`, if given, is set true when the
+// Error is a failure to write the outputs after every check passed (a full disk: the contract's
+// exit 1), false otherwise (bad input or setting: exit 2).
 Result<RosMapSummary> exportRosMap(const std::string& map_json, const std::string& out_dir,
-                                   const RosMapOptions& options);
+                                   const RosMapOptions& options, bool* output_failed = nullptr);
 
 }  // namespace crunch

@@ -41,12 +41,15 @@ struct ExportReport {
   // One line for the user: what was written, cell or row counts, and what the input lacked
   // (a map without free space, a damaged recording).
   std::string summary;
-  // A damaged recording (csv): exported up to the damage; crunchhost exits 3 (ARCHITECTURE.md §4).
-  bool damaged = false;
+  // crunchhost's exit status (ARCHITECTURE.md §4): 0 written; 1 an output could not be written
+  // after every check passed (a full disk; nothing left half-written); 2 bad input or setting;
+  // 3 a damaged recording (csv), exported up to the damage.
+  int exit_status = 0;
 };
 
-// Validates `options`, then writes the chosen format's files into options.out_dir. An Error names
-// the flag or the file; nothing is written then.
-Result<ExportReport> runExport(const ExportOptions& options);
+// Validates `options`, then writes the chosen format's files into options.out_dir. On an error
+// (exit_status 1 or 2) `summary` is the message naming the flag or the file, and nothing is
+// written.
+ExportReport runExport(const ExportOptions& options);
 
 }  // namespace crunch::session

@@ -39,9 +39,12 @@ struct RecordingCsvSummary {
 
 // Replays `recording` and writes DIR/samples.csv, DIR/contacts.csv, DIR/odometry.csv (DIR
 // created if missing). A damaged recording is exported up to the damage (summary.damage says
-// where); a file that is no recording, bad metadata or an unwritable DIR is an Error naming it,
-// and nothing is written.
+// where); a file that is no recording, bad metadata or a DIR that cannot take the files
+// ("--out ...") is an Error naming it, and nothing is written. `output_failed`, if given, is set
+// true when the Error is a failure to write the outputs after every check passed (a full disk:
+// the contract's exit 1), false otherwise (exit 2).
 Result<RecordingCsvSummary> exportRecordingCsv(const std::string& recording,
-                                               const std::string& out_dir);
+                                               const std::string& out_dir,
+                                               bool* output_failed = nullptr);
 
 }  // namespace crunch::session
