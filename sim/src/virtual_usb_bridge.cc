@@ -365,15 +365,16 @@ Result<std::unique_ptr<VirtualUsbBridge>> VirtualUsbBridge::create(const Options
   impl->send_uevents = preloaded();
   impl->testbed = umockdev_testbed_new();
   if (impl->testbed == nullptr) return Error{"virtual USB bridge: cannot create a umockdev testbed"};
-  // Only the USB device nodes are emulated (docs/CREATE.md, "Your own client"). umockdev 0.17's
-  // testbed always serves a catch-all ioctl handler on ROOT/ioctl/_default, and its preload
-  // connects every file a process opens under /dev/ that has no handler of its own to it: a pty
-  // /dev/pts/N, /dev/ttyUSB0, /dev/null. From then on each ioctl() call on that file goes to the
-  // catch-all, which has no recording and answers ENOTTY, so ioctl(FIONBIO) (boost::asio's
-  // non-blocking mode) and ioctl(FIONREAD) (pyserial's in_waiting) fail on the child's Create
-  // port, while tcgetattr/tcsetattr work (glibc issues their ioctls as system calls, past the
-  // preload's ioctl() wrapper). Without the socket the preload's connect fails and, for a path
-  // outside the testbed, it leaves the file alone: it is the kernel's tty again.
+  // Only the USB device nodes are emulated (docs/CREATE.md, "Your own Create client against the
+  // virtual robot"). umockdev 0.17's testbed always serves a catch-all ioctl handler on
+  // ROOT/ioctl/_default, and its preload connects every file a process opens under /dev/ that
+  // has no handler of its own to it: a pty /dev/pts/N, /dev/ttyUSB0, /dev/null. From then on each
+  // ioctl() call on that file goes to the catch-all, which has no recording and answers ENOTTY,
+  // so ioctl(FIONBIO) (boost::asio's non-blocking mode) and ioctl(FIONREAD) (pyserial's
+  // in_waiting) fail on the child's Create port, while tcgetattr/tcsetattr work (glibc issues
+  // their ioctls as system calls, past the preload's ioctl() wrapper). Without the socket the
+  // preload's connect fails and, for a path outside the testbed, it leaves the file alone: it is
+  // the kernel's tty again.
   {
     const std::string catch_all = rootDirOf(impl->testbed) + "/ioctl/_default";
     if (::unlink(catch_all.c_str()) != 0 && errno != ENOENT)

@@ -12,8 +12,9 @@
 // time), so the unmodified `crunchhost --robot` runs against it as against the real robot.
 // Only the USB device nodes are emulated: the Create's pty stays the kernel's tty under the
 // preload, whatever serial library the child uses (VirtualUsbBridge::create, docs/CREATE.md
-// "Your own Create client"). --no-usb-preload starts the child without the preload and without
-// UMOCKDEV_DIR, for a child that talks only to the Create (it then cannot see the USB bridge).
+// "Your own Create client against the virtual robot"). --no-usb-preload starts the child
+// without the preload and without UMOCKDEV_DIR, for a child that talks only to the Create (it
+// then cannot see the USB bridge).
 //
 // Packet ids the Create 1 does not have (outside 0..42) that the child asks for are skipped by
 // the emulator (CreateEmulator), said once on stderr and listed in the summary.
