@@ -204,7 +204,7 @@ class Client:
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--port", required=True, help="the Create's serial port")
-    ap.add_argument("--leg", type=float, default=0.3, help="each straight leg, m")
+    ap.add_argument("--leg", type=float, default=0.2, help="each straight leg, m")
     ap.add_argument("--speed", type=float, default=0.2, help="straight speed, m/s")
     ap.add_argument("--turn-deg", type=int, default=90, help="the turn, degrees (CCW)")
     ap.add_argument("--turn-rate", type=float, default=0.5, help="turn rate, rad/s")
