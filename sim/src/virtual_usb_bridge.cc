@@ -374,7 +374,8 @@ Result<std::unique_ptr<VirtualUsbBridge>> VirtualUsbBridge::create(const Options
   // in_waiting) fail on the child's Create port, while tcgetattr/tcsetattr work (glibc issues
   // their ioctls as system calls, past the preload's ioctl() wrapper). Without the socket the
   // preload's connect fails and, for a path outside the testbed, it leaves the file alone: it is
-  // the kernel's tty again.
+  // the kernel's tty again. (For a node inside the testbed without a handler of its own the
+  // preload would exit instead; plug() attaches the handler before it adds the node.)
   {
     const std::string catch_all = rootDirOf(impl->testbed) + "/ioctl/_default";
     if (::unlink(catch_all.c_str()) != 0 && errno != ENOENT)
