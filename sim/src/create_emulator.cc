@@ -51,7 +51,9 @@ bool knownId(std::uint8_t id) { return id <= oi::kLastPacketId; }
 std::size_t dataBytes(std::uint8_t id) {
   const auto [first, last] = groupRange(id);
   std::size_t n = 0;
-  for (int m = first; m <= last; ++m) n += static_cast<std::size_t>(oi::packetSize(static_cast<std::uint8_t>(m)));
+  for (int m = first; m <= last; ++m) {
+    n += static_cast<std::size_t>(oi::packetSize(static_cast<std::uint8_t>(m)));
+  }
   return n;
 }
 
@@ -74,7 +76,9 @@ std::size_t expandIds(std::span<const std::uint8_t> requested, std::span<std::ui
   std::size_t n = 0;
   for (const std::uint8_t r : requested) {
     const auto [first, last] = groupRange(r);
-    for (int id = first; id <= last && n < ids.size(); ++id) ids[n++] = static_cast<std::uint8_t>(id);
+    for (int id = first; id <= last && n < ids.size(); ++id) {
+      ids[n++] = static_cast<std::uint8_t>(id);
+    }
   }
   return n;
 }
