@@ -397,6 +397,22 @@ TEST_CASE("Robot: the bridge unplugged mid-run stops the robot, keeps the map an
   std::size_t roams = 0;
   for (std::size_t at = 0; (at = r.output.find("\"roaming\"", at)) != std::string::npos; ++at) ++roams;
   CHECK(roams >= 2);
+  // A "status" line at every running-map post (--map-every 5: about five in 25 s), what
+  // tools/soak.sh charts; the writes before the last line have been timed.
+  std::vector<json> status;
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("{\"event\":\"status\"", 0) == 0) status.push_back(json::parse(line));
+  }
+  REQUIRE(status.size() >= 3);
+  const json& last = status.back();
+  CHECK(last["rss_kib"].get<long>() > 1000);
+  CHECK(last["ring_high_water"].get<long>() > 0);
+  CHECK(last["ring_dropped"] == 0);
+  CHECK(last["map_writes"].get<int>() >= 2);
+  CHECK(last["map_write_failures"] == 0);
+  CHECK(last["map_write_max_s"].get<double>() > 0.0);
+  CHECK(last["t"].get<double>() > status.front()["t"].get<double>());
 }
 
 TEST_CASE("Robot: corrupt frames and serial garbage are counted and never reach the pipeline",
