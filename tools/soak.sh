@@ -5,7 +5,8 @@
 # running-map write (every --map-every 10 s) gives resident memory, the USB ring's high water and
 # drops, frames lost before the host, the Create watchdog's stops and the map writer's latency;
 # this script keeps them in OUT/status.csv and charts them over time in OUT/soak.png with
-# tools/soak_chart.py (Debian's python3-matplotlib). Uses the build in build/default.
+# tools/soak_chart.py (Debian's python3-matplotlib). Uses the build in $CRUNCH_BUILD (default
+# build/default; a copy lets the tree be rebuilt while a soak runs).
 #   tools/soak.sh 3600 /tmp/soak     # the one-hour soak of docs/ROBOT.md
 # Exit status: crunchhost's (0 a clean run), or 1 when the run's own checks fail (memory grew
 # more than 10 % from the second tenth's median to the last tenth's, frames were lost, the ring
@@ -16,7 +17,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:?usage: tools/soak.sh SECONDS OUT_DIR}
 out=${2:?usage: tools/soak.sh SECONDS OUT_DIR}
 mkdir -p "$out"
-build=build/default
+build=${CRUNCH_BUILD:-build/default}  # the build whose binaries run
 scene=test/scenes/hil_one_table.json
 limit=$((seconds + 120))
 
