@@ -97,7 +97,9 @@ TEST_CASE("Settings: a bad seed or scene file is exit 2, named, nothing written 
                         Case{nul_args.c_str(), "nul.json: line 1, column"},
                         Case{fifo_args.c_str(), "fifo.json: cannot read scene file: not a "
                                                 "regular file"},
-                        Case{"--scene /dev/zero", "/dev/zero: cannot read scene file"}};
+                        Case{"--scene /dev/zero", "/dev/zero: cannot read scene file"},
+                        Case{"--scene /tmp", "--scene: File is actually a directory"},
+                        Case{"--scene no/such/scene.json", "--scene: File does not exist"}};
   for (const Case& c : cases) expectRefused("--sim", c);
 }
 
