@@ -14,12 +14,9 @@
 
 #include "crunch/session/robot_session.h"
 #include "crunch/session/session_settings.h"
+#include "fuzz_check.h"
 
-namespace {
-void check(bool ok) {
-  if (!ok) std::abort();
-}
-}  // namespace
+using fuzz::check;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

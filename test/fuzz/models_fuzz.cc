@@ -12,12 +12,9 @@
 
 #include "crunch/signal/models_io.h"
 #include "crunch/signal/pipeline.h"
+#include "fuzz_check.h"
 
-namespace {
-void check(bool ok) {
-  if (!ok) std::abort();
-}
-}  // namespace
+using fuzz::check;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

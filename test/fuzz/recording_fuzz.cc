@@ -19,15 +19,14 @@
 #include <vector>
 
 #include "crunch/io/recording.h"
+#include "fuzz_check.h"
 
 using crunch::io::Chunk;
 using crunch::io::RecordingReader;
 
 namespace {
 
-void check(bool ok) {
-  if (!ok) std::abort();
-}
+using fuzz::check;
 
 // One scratch file per process, removed at exit (a plain array: it outlives every destructor).
 char g_path[64] = {};

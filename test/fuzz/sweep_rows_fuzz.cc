@@ -12,11 +12,10 @@
 #include <string>
 
 #include "crunch/mapping/sweep.h"
+#include "fuzz_check.h"
 
 namespace {
-void check(bool ok) {
-  if (!ok) std::abort();
-}
+using fuzz::check;
 bool fraction(double v) { return std::isnan(v) || (v >= 0.0 && v <= 1.0); }
 }  // namespace
 

@@ -23,6 +23,7 @@
 #include "crunch/mapping/evaluation.h"
 #include "crunch/mapping/map_io.h"
 #include "crunch/scene/scene.h"
+#include "support/run_command.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -42,27 +43,15 @@ const HilScene kTwoTables{std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/hil_two
                           "--start-x 0.35 --start-y 0.35 --start-theta 0.785 --area-width 2.5 "
                           "--area-depth 2.5"};
 
-struct Run {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr, interleaved
-  double wall_s = 0.0;
-  json summary;        // crunch-virtual-robot's last line, if any
+struct Run : CommandRun {
+  json summary;  // crunch-virtual-robot's last line, if any
 };
 
 Run run(const std::string& command) {
   Run r;
-  const auto t0 = std::chrono::steady_clock::now();
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::istringstream lines(r.output);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("{\"child_exit\"", 0) == 0) r.summary = json::parse(line);
-  }
+  static_cast<CommandRun&>(r) = runCommand(command);
+  if (auto line = lastLineStartingWith(r.output, "{\"child_exit\""); !line.empty())
+    r.summary = json::parse(line);
   return r;
 }
 

@@ -17,35 +17,26 @@
 #include <sstream>
 #include <string>
 
+#include "support/run_command.h"
+
 namespace {
 
 using nlohmann::json;
 
 constexpr double kPi = 3.14159265358979323846;
 
-struct Run {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr, interleaved
-  double wall_s = 0.0;
-  json client;         // the client's JSON line
-  json summary;        // crunch-virtual-robot's summary line
+struct Run : CommandRun {
+  json client;   // the client's JSON line
+  json summary;  // crunch-virtual-robot's summary line
 };
 
 Run run(const std::string& command) {
   Run r;
-  const auto t0 = std::chrono::steady_clock::now();
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::istringstream lines(r.output);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("{\"client\"", 0) == 0) r.client = json::parse(line);
-    if (line.rfind("{\"child_exit\"", 0) == 0) r.summary = json::parse(line);
-  }
+  static_cast<CommandRun&>(r) = runCommand(command);
+  if (auto line = lastLineStartingWith(r.output, "{\"client\""); !line.empty())
+    r.client = json::parse(line);
+  if (auto line = lastLineStartingWith(r.output, "{\"child_exit\""); !line.empty())
+    r.summary = json::parse(line);
   return r;
 }
 
