@@ -9,6 +9,7 @@ PACKAGES=(
   catch2 libbenchmark-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev help2man file
   gcc-avr avr-libc simavr
   umockdev libumockdev-dev
+  python3-serial
 )
 
 missing=()

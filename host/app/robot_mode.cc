@@ -1,6 +1,9 @@
 #include "robot_mode.h"
 
+#include <unistd.h>
+
 #include <chrono>
+#include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <ostream>
@@ -155,6 +158,37 @@ void runLoop(session::RobotController& controller, const StopSignals& signals) {
   }
 }
 
+// The process's resident memory now (KiB, /proc/self/statm), -1 if unreadable.
+long residentKib() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return -1;
+  long pages_total = 0, pages_resident = -1;
+  const int n = std::fscanf(f, "%ld %ld", &pages_total, &pages_resident);
+  std::fclose(f);
+  return n == 2 ? pages_resident * (::sysconf(_SC_PAGESIZE) / 1024) : -1;
+}
+
+// The --json "status" line, at each running-map post: what a soak charts over time
+// (tools/soak.sh): memory, the ring's high water and drops, frames lost before the host, the
+// Create's watchdog stops, and the map writer's latency.
+json statusLine(const RobotSession& session, const Devices& d, const session::MapWriter& writer,
+                double t) {
+  std::uint64_t lost = 0;
+  for (const auto& b : session.decoderCounters().boards) lost += b.lost_frames;
+  const session::MapWriter::Stats w = writer.stats();
+  return {{"event", "status"},
+          {"t", t},
+          {"rss_kib", residentKib()},
+          {"ring_high_water", d.ring.highWater()},
+          {"ring_dropped", d.ring.dropped()},
+          {"lost_frames", lost},
+          {"watchdog_stops", d.create->watchdogStops()},
+          {"map_writes", w.writes},
+          {"map_write_failures", w.failures},
+          {"map_write_last_s", w.last_s},
+          {"map_write_max_s", w.max_s}};
+}
+
 json robotReport(const RobotSession& session, const Map& map, const session::RobotController& c,
                  const Devices& d, const io::RecordingWriter* recorder) {
   json report = json::parse(session::sessionReportJson(session, map));
@@ -210,7 +244,10 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
   sources.drain_bridge = [&d](const auto& sink) { d.ring.drain(sink); };
   sources.link = &d.link;
   sources.watchdog_stops = [&d] { return d.create->watchdogStops(); };
-  sources.map = [&writer](Map map) { writer->post(std::move(map)); };
+  sources.map = [&writer, &opt, &out, &session, &d](Map map) {
+    writer->post(std::move(map));
+    if (opt.json_progress) out << statusLine(session, d, *writer, d.create->now()).dump() << std::endl;
+  };
   const session::EventSink progress = progressPrinter(opt.json_progress, out);
   auto made =
       session::RobotController::create(*d.create, session, p.control, std::move(sources), progress);
@@ -309,10 +346,16 @@ int runReplay(const ReplayOptions& opt, std::ostream& out, std::ostream& err) {
     return 2;
   }
   const session::Replay& r = replayed.value();
+  if (!r.metadata_protected) {
+    err << "crunchhost: --replay: " << opt.recording
+        << " is a version-1 recording: its settings have no CRC of their own, so damage there "
+           "cannot be detected (recordings made now carry one)\n";
+  }
   json report = json::parse(session::sessionReportJson(*r.session, r.map));
   report["mode"] = "replay";
   report["recording"] = opt.recording;
   report["records"] = r.records;
+  report["metadata_crc"] = r.metadata_protected;
   report["wall_s"] = secondsSince(t0);
   if (!r.damage.empty()) report["damage"] = r.damage;
   if (writeOutputs(r.map, r.options, opt.out_dir, "crunchhost --replay " + opt.recording, report,

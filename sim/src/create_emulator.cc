@@ -45,6 +45,48 @@ std::pair<int, int> groupRange(std::uint8_t id) {
   }
 }
 
+bool knownId(std::uint8_t id) { return id <= oi::kLastPacketId; }
+
+// Data bytes of packet `id`, a group's being the sum of its members'.
+std::size_t dataBytes(std::uint8_t id) {
+  const auto [first, last] = groupRange(id);
+  std::size_t n = 0;
+  for (int m = first; m <= last; ++m) {
+    n += static_cast<std::size_t>(oi::packetSize(static_cast<std::uint8_t>(m)));
+  }
+  return n;
+}
+
+// Appends the data of packet `id` (a group: its members in order) from `f` at out[k]; returns the
+// new end. The OI sends 16-bit values high byte first.
+std::size_t writeData(std::uint8_t id, const oi::SensorFrame& f, std::span<std::uint8_t> out,
+                      std::size_t k) {
+  const auto [first, last] = groupRange(id);
+  for (int m = first; m <= last; ++m) {
+    const auto member = static_cast<std::uint8_t>(m);
+    const std::int32_t v = f.get(member);
+    if (oi::packetSize(member) == 2) out[k++] = static_cast<std::uint8_t>((v >> 8) & 0xFF);
+    out[k++] = static_cast<std::uint8_t>(v & 0xFF);
+  }
+  return k;
+}
+
+// The single packets behind `requested` (groups expanded, in order) into `ids`; returns how many.
+std::size_t expandIds(std::span<const std::uint8_t> requested, std::span<std::uint8_t> ids) {
+  std::size_t n = 0;
+  for (const std::uint8_t r : requested) {
+    const auto [first, last] = groupRange(r);
+    for (int id = first; id <= last && n < ids.size(); ++id) {
+      ids[n++] = static_cast<std::uint8_t>(id);
+    }
+  }
+  return n;
+}
+
+// The manual's limits on a Stream: at most 43 ids; n, one byte, counts the frame's data bytes.
+constexpr std::size_t kMaxStreamIds = 43;
+constexpr std::size_t kMaxStreamBytes = 255;
+
 }  // namespace
 
 Result<std::unique_ptr<CreateEmulator>> CreateEmulator::open(MobileBase& body,
@@ -228,9 +270,16 @@ void CreateEmulator::execute() {
       break;
     case oi::kStream: {
       stream_n_ = 0;
+      std::size_t frame_bytes = 0;
       for (std::size_t i = 0; i < cmd_[1]; ++i) {
         const std::uint8_t id = cmd_[2 + i];
-        if (oi::packetSize(id) != 0) stream_ids_[stream_n_++] = id;  // groups: not emulated
+        const std::size_t need = knownId(id) ? 1 + dataBytes(id) : 0;
+        if (!knownId(id) || stream_n_ == kMaxStreamIds || frame_bytes + need > kMaxStreamBytes) {
+          noteUnsupported(id);
+          continue;
+        }
+        stream_ids_[stream_n_++] = id;
+        frame_bytes += need;
       }
       paused_ = false;
       next_due_ = body_.now();
@@ -272,10 +321,16 @@ void CreateEmulator::accumulateMotion() {
   last_pose_ = p;
 }
 
+void CreateEmulator::noteUnsupported(std::uint8_t id) {
+  ++counters_.unsupported_ids;
+  unsupported_seen_.set(id);
+}
+
 oi::SensorFrame CreateEmulator::snapshot(std::span<const std::uint8_t> ids) {
   accumulateMotion();
   oi::SensorFrame f;
   for (const std::uint8_t id : ids) {
+    if (f.has(id)) continue;  // asked twice (e.g. 19 and group 2): one reading, sent twice
     std::int32_t v = 0;
     switch (id) {
       case oi::kBumpsWheelDrops:
@@ -311,37 +366,46 @@ oi::SensorFrame CreateEmulator::snapshot(std::span<const std::uint8_t> ids) {
 }
 
 void CreateEmulator::answerSensors(std::span<const std::uint8_t> requested) {
-  std::array<std::uint8_t, 256> ids{};
-  std::size_t n = 0;
+  std::array<std::uint8_t, 256> known{};
+  std::size_t m = 0;
   for (const std::uint8_t r : requested) {
-    const auto [first, last] = groupRange(r);
-    if (oi::packetSize(static_cast<std::uint8_t>(first)) == 0) continue;  // unknown id: nothing
-    for (int id = first; id <= last && n < ids.size(); ++id) ids[n++] = static_cast<std::uint8_t>(id);
+    if (knownId(r)) {
+      known[m++] = r;
+    } else {
+      noteUnsupported(r);  // no bytes for it: the manual has no error reply
+    }
   }
+  std::array<std::uint8_t, 256 * 36> ids{};
+  const std::size_t n = expandIds({known.data(), m}, ids);
   const oi::SensorFrame f = snapshot({ids.data(), n});
-  std::array<std::uint8_t, 512> out{};
+  std::array<std::uint8_t, 256 * 52> out{};
   std::size_t k = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::int32_t v = f.get(ids[i]);
-    if (oi::packetSize(ids[i]) == 2) out[k++] = static_cast<std::uint8_t>((v >> 8) & 0xFF);
-    out[k++] = static_cast<std::uint8_t>(v & 0xFF);
-  }
+  for (std::size_t i = 0; i < m; ++i) k = writeData(known[i], f, out, k);
   write({out.data(), k});
 }
 
 void CreateEmulator::sendPacket() {
-  const oi::SensorFrame f = snapshot(streamIds());
-  std::array<std::uint8_t, 600> out{};
-  const std::size_t n =
-      oi::encodeStreamPacket(streamIds(), f, options_.checksum_includes_header, out);
-  if (n == 0) return;
+  std::array<std::uint8_t, kMaxStreamIds * 36> ids{};
+  const std::size_t n_ids = expandIds(streamIds(), ids);
+  const oi::SensorFrame f = snapshot({ids.data(), n_ids});
+  std::array<std::uint8_t, kMaxStreamBytes + 3> out{};
+  std::size_t k = 2;
+  for (const std::uint8_t id : streamIds()) {
+    out[k++] = id;
+    k = writeData(id, f, out, k);
+  }
+  out[0] = oi::kStreamHeader;
+  out[1] = static_cast<std::uint8_t>(k - 2);
+  unsigned sum = 0;
+  for (std::size_t i = options_.checksum_includes_header ? 0 : 1; i < k; ++i) sum += out[i];
+  out[k++] = static_cast<std::uint8_t>((256u - (sum & 0xFFu)) & 0xFFu);
   if (corrupt_ > 0) {
     --corrupt_;
     ++counters_.corrupted_packets;
-    out[n - 1] ^= 0x5A;
+    out[k - 1] ^= 0x5A;
   }
   ++counters_.packets_sent;
-  write({out.data(), n});
+  write({out.data(), k});
 }
 
 void CreateEmulator::write(std::span<const std::uint8_t> bytes) {

@@ -52,6 +52,13 @@ std::vector<std::uint8_t> descriptors(io::UsbId id, std::uint8_t endpoint) {
       0x07, 0x05, endpoint, 0x02, 0x00, 0x02, 0x00};
 }
 
+std::string rootDirOf(UMockdevTestbed* testbed) {
+  gchar* d = umockdev_testbed_get_root_dir(testbed);
+  std::string s = d != nullptr ? d : "";
+  g_free(d);
+  return s;
+}
+
 }  // namespace
 
 struct VirtualUsbBridge::Impl {
@@ -358,6 +365,23 @@ Result<std::unique_ptr<VirtualUsbBridge>> VirtualUsbBridge::create(const Options
   impl->send_uevents = preloaded();
   impl->testbed = umockdev_testbed_new();
   if (impl->testbed == nullptr) return Error{"virtual USB bridge: cannot create a umockdev testbed"};
+  // Only the USB device nodes are emulated (docs/CREATE.md, "Your own Create client against the
+  // virtual robot"). umockdev 0.17's testbed always serves a catch-all ioctl handler on
+  // ROOT/ioctl/_default, and its preload connects every file a process opens under /dev/ that
+  // has no handler of its own to it: a pty /dev/pts/N, /dev/ttyUSB0, /dev/null. From then on each
+  // ioctl() call on that file goes to the catch-all, which has no recording and answers ENOTTY,
+  // so ioctl(FIONBIO) (boost::asio's non-blocking mode) and ioctl(FIONREAD) (pyserial's
+  // in_waiting) fail on the child's Create port, while tcgetattr/tcsetattr work (glibc issues
+  // their ioctls as system calls, past the preload's ioctl() wrapper). Without the socket the
+  // preload's connect fails and, for a path outside the testbed, it leaves the file alone: it is
+  // the kernel's tty again. (For a node inside the testbed without a handler of its own the
+  // preload would exit instead; plug() attaches the handler before it adds the node.)
+  {
+    const std::string catch_all = rootDirOf(impl->testbed) + "/ioctl/_default";
+    if (::unlink(catch_all.c_str()) != 0 && errno != ENOENT)
+      return Error{"virtual USB bridge: cannot remove umockdev's catch-all ioctl socket " +
+                   catch_all + ": " + std::strerror(errno)};
+  }
   impl->handler = umockdev_ioctl_base_new();
   impl->signal_id = g_signal_connect(impl->handler, "handle-ioctl",
                                      G_CALLBACK(&Impl::onIoctl), impl.get());
@@ -399,12 +423,7 @@ std::string VirtualUsbBridge::devicePath() const {
   return impl_->devnode;
 }
 
-std::string VirtualUsbBridge::rootDir() const {
-  gchar* d = umockdev_testbed_get_root_dir(impl_->testbed);
-  std::string s = d != nullptr ? d : "";
-  g_free(d);
-  return s;
-}
+std::string VirtualUsbBridge::rootDir() const { return rootDirOf(impl_->testbed); }
 
 std::uint64_t VirtualUsbBridge::urbsCompleted() const {
   std::lock_guard<std::mutex> lock(impl_->mu);

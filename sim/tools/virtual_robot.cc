@@ -10,6 +10,14 @@
 // umockdev preload library and the testbed's UMOCKDEV_DIR, and "{create}" in its arguments is
 // replaced by the emulator's pty path. Simulated time follows the wall clock (--rate times real
 // time), so the unmodified `crunchhost --robot` runs against it as against the real robot.
+// Only the USB device nodes are emulated: the Create's pty stays the kernel's tty under the
+// preload, whatever serial library the child uses (VirtualUsbBridge::create, docs/CREATE.md
+// "Your own Create client against the virtual robot"). --no-usb-preload starts the child
+// without the preload and without UMOCKDEV_DIR, for a child that talks only to the Create (it
+// then cannot see the USB bridge).
+//
+// Packet ids the Create 1 does not have (outside 0..42) that the child asks for are skipped by
+// the emulator (CreateEmulator), said once on stderr and listed in the summary.
 //
 // Faults (for the tests): --unplug-at/--replug-at (seconds of simulated time), --corrupt-every N
 // (one byte of every Nth tick's bridge bytes flipped), --serial-garbage-every S (garbage bytes
@@ -25,6 +33,7 @@
 
 #include <CLI/CLI.hpp>
 #include <array>
+#include <bitset>
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
@@ -43,25 +52,47 @@ namespace {
 
 using namespace crunch;
 
-pid_t spawnChild(std::vector<std::string> args, const std::string& create_path) {
+pid_t spawnChild(std::vector<std::string> args, const std::string& create_path,
+                 bool usb_preload) {
   for (std::string& a : args) {
     const auto at = a.find("{create}");
     if (at != std::string::npos) a.replace(at, 8, create_path);
   }
   const pid_t pid = fork();
   if (pid != 0) return pid;
-  // The child: the umockdev preload makes libusb see the testbed's device.
-  std::string preload = "libumockdev-preload.so.0";
-  if (const char* old = std::getenv("LD_PRELOAD"); old != nullptr && *old != '\0') {
-    preload += std::string(":") + old;
+  if (usb_preload) {
+    // The child: the umockdev preload makes libusb see the testbed's device.
+    std::string preload = "libumockdev-preload.so.0";
+    if (const char* old = std::getenv("LD_PRELOAD"); old != nullptr && *old != '\0') {
+      preload += std::string(":") + old;
+    }
+    setenv("LD_PRELOAD", preload.c_str(), 1);
+  } else {
+    unsetenv("UMOCKDEV_DIR");  // LD_PRELOAD is left as the user set it
   }
-  setenv("LD_PRELOAD", preload.c_str(), 1);
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   execvp(argv[0], argv.data());
   std::perror(("crunch-virtual-robot: cannot run " + args[0]).c_str());
   _exit(127);
+}
+
+std::vector<int> idVector(const std::bitset<256>& ids) {
+  std::vector<int> v;
+  for (int id = 0; id < 256; ++id) {
+    if (ids.test(static_cast<std::size_t>(id))) v.push_back(id);
+  }
+  return v;
+}
+
+std::string idList(const std::bitset<256>& ids) {
+  std::string s;
+  for (const int id : idVector(ids)) {
+    if (!s.empty()) s.append(", ");
+    s.append(std::to_string(id));
+  }
+  return s;
 }
 
 void sleepFor(double seconds) {
@@ -82,6 +113,7 @@ int main(int argc, char** argv) {
   int corrupt_every = 0;
   bool silent = false;
   bool log_contacts = false;
+  bool no_usb_preload = false;
   double interrupt_at = -1.0;
   std::vector<std::string> child;
   app.add_option("--scene", scene_path, "scene file (ARCHITECTURE.md §4)")->required();
@@ -101,6 +133,9 @@ int main(int argc, char** argv) {
                  "simulated second at which the child gets SIGINT (Ctrl-C)");
   app.add_flag("--log-contacts", log_contacts,
                "print each true whisker contact (ODE) as it begins, on stderr");
+  app.add_flag("--no-usb-preload", no_usb_preload,
+               "start the child without the umockdev preload (it sees the Create, not the USB "
+               "bridge)");
   app.add_option("child", child, "the program to run, after --")->required();
   CLI11_PARSE(app, argc, argv);
 
@@ -146,7 +181,7 @@ int main(int argc, char** argv) {
   std::cerr << "crunch-virtual-robot: scene " << scene_path << ", USB bridge at "
             << bridge.devicePath() << ", Create on " << create.slavePath() << "\n";
 
-  const pid_t pid = spawnChild(child, create.slavePath());
+  const pid_t pid = spawnChild(child, create.slavePath(), !no_usb_preload);
   if (pid < 0) {
     std::perror("crunch-virtual-robot: fork");
     return 2;
@@ -159,6 +194,7 @@ int main(int argc, char** argv) {
   double next_garbage = garbage_every > 0.0 ? sim0 + garbage_every : -1.0;
   bool unplugged = false, replugged = false;
   std::array<bool, 4> touching{}, detecting{};
+  std::uint64_t unsupported_said = 0;  // unsupported ids already reported on stderr
   int status = 0;
   int exit_code = -1;
   while (true) {
@@ -237,6 +273,14 @@ int main(int argc, char** argv) {
       garbage += sizeof kGarbage;
       next_garbage += garbage_every;
     }
+    if (unsupported_said == 0 && create.counters().unsupported_ids > 0) {
+      unsupported_said = create.counters().unsupported_ids;
+      std::cerr << "crunch-virtual-robot: the client asked for packet id(s) "
+                << idList(create.unsupportedIds())
+                << " that the Create 1 (OI v2, packet ids 0-42) does not have: they are skipped, "
+                   "so the answer or stream carries only the other ids (said once; the count is "
+                   "in the summary's create.unsupported_ids)\n";
+    }
     if (steps == 0) sleepFor(0.0005);  // ahead of the wall clock: wait for it
   }
   const Pose2 p = r.robot().odometry();
@@ -250,6 +294,8 @@ int main(int argc, char** argv) {
       {"usb", {{"urbs", bridge.urbsCompleted()}, {"bytes", bridge.bytesDelivered()}}},
       {"create", {{"commands", create.counters().commands},
                   {"packets", create.counters().packets_sent},
+                  {"unsupported_ids", create.counters().unsupported_ids},
+                  {"unsupported_id_list", idVector(create.unsupportedIds())},
                   {"last_wheels_mm_s", {create.requestedRight(), create.requestedLeft()}}}}};
   std::cout << summary.dump() << std::endl;
   return exit_code;

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "support/run_command.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -27,15 +28,10 @@ const std::string kSource = CRUNCH_SOURCE_DIR;
 
 // Runs `command` in the project's root; returns its exit status, output in `out`.
 int run(const std::string& command, std::string* out = nullptr) {
-  FILE* p = popen(("cd '" + kSource + "' && " + command + " 2>&1").c_str(), "r");
-  REQUIRE(p != nullptr);
-  std::string text;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) text += buf;
-  const int status = pclose(p);
-  if (out != nullptr) *out = text;
-  INFO(text);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const CommandRun r = runCommand("cd '" + kSource + "' && " + command);
+  if (out != nullptr) *out = r.output;
+  INFO(r.output);
+  return r.exit_code;
 }
 
 json readJson(const std::string& path) {

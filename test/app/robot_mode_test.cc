@@ -128,3 +128,39 @@ TEST_CASE(
   CHECK(err.str().find("Create") == std::string::npos);  // no device was tried
   CHECK_FALSE(std::filesystem::exists(dir.file("out")));
 }
+
+TEST_CASE("Robot mode: --replay: settings out of range in the metadata are exit 2 naming them, "
+          "nothing written (issue 16)", "[app]") {
+  struct Row {
+    const char* pointer;  // a JSON pointer into the metadata
+    json value;
+    const char* named;
+  };
+  const Row row = GENERATE(Row{"/settings/mapping/working_memory", -5, "working_memory"},
+                           Row{"/settings/mapping/schedule_steps", 100000000, "schedule_steps"},
+                           Row{"/settings/mapping/global_chains", 0, "global_chains"},
+                           Row{"/settings/area", json::array({0.0, 0.0, 1e308, 1e308}), "area"},
+                           Row{"/settings/seed", -1, "seed"},
+                           Row{"/models/radial/whiskers/1/sigma", 0.0, "sigma"});
+  TempDir dir;
+  auto models = signal::loadModels(std::string(CRUNCH_SOURCE_DIR) + "/models/sim_models.json");
+  REQUIRE(models);
+  session::RobotSessionOptions s = session::sessionOptions(models.value(), MappingOptions{}, 1);
+  json meta = json::parse(session::recordingMetadata(s, {"1209:0001", "/dev/ttyUSB0", "test"}));
+  meta[json::json_pointer(row.pointer)] = row.value;
+  app::ReplayOptions o;
+  o.recording = dir.file("bad.crec");
+  {
+    auto w = io::RecordingWriter::create(o.recording, meta.dump());
+    REQUIRE(w);
+    REQUIRE(w.value()->close());
+  }
+  o.out_dir = dir.file("out");
+  std::ostringstream out, err;
+  const int code = app::runReplay(o, out, err);
+  INFO(row.pointer << ": " << err.str());
+  CHECK(code == 2);
+  CHECK(err.str().find(row.named) != std::string::npos);
+  CHECK(err.str().find(o.recording) != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir.file("out")));
+}

@@ -14,25 +14,15 @@
 #include <filesystem>
 #include <string>
 
+#include "support/run_command.h"
 #include "support/temp_dir.h"
 
 namespace {
 
-struct Run {
-  int exit_code = -1;
-  std::string output;
-};
+using Run = CommandRun;
 
-Run run(const std::string& args) {
-  Run r;
-  FILE* p = popen((std::string(CRUNCHHOST) + " " + args + " 2>&1").c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+// `crunchhost ARGS`, as a user would run it.
+Run run(const std::string& args) { return runCommand(std::string(CRUNCHHOST) + " " + args); }
 
 struct Case {
   const char* args;   // the bad setting
@@ -97,7 +87,9 @@ TEST_CASE("Settings: a bad seed or scene file is exit 2, named, nothing written 
                         Case{nul_args.c_str(), "nul.json: line 1, column"},
                         Case{fifo_args.c_str(), "fifo.json: cannot read scene file: not a "
                                                 "regular file"},
-                        Case{"--scene /dev/zero", "/dev/zero: cannot read scene file"}};
+                        Case{"--scene /dev/zero", "/dev/zero: cannot read scene file"},
+                        Case{"--scene /tmp", "--scene: File is actually a directory"},
+                        Case{"--scene no/such/scene.json", "--scene: File does not exist"}};
   for (const Case& c : cases) expectRefused("--sim", c);
 }
 

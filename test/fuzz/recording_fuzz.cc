@@ -1,7 +1,9 @@
 // libFuzzer target for the recording reader (crunch/io/recording.h, docs/RECORDING.md): the input
 // is written to a temporary file as it is and read with RecordingReader until kEnd or kDamaged.
-// Byte 0 of the input, if bit 0 is set, selects a "repair" mode that rewrites the file header's
-// CRC (bytes 28..31) so the fuzzer gets past open() and into the records without guessing it.
+// Byte 0 of the input, if bit 0 is set, selects a "repair" mode that rewrites the metadata's
+// CRC (bytes 24..27, format version 2, when the metadata length fits the input) and the file
+// header's CRC (bytes 28..31) so the fuzzer gets past open() and into the records without
+// guessing them.
 // Checks, beyond "no crash, no sanitizer report":
 //   - open() either succeeds or gives an error naming the file;
 //   - no record is larger than kMaxChunkBytes, and its stream is 1..3;
@@ -17,15 +19,14 @@
 #include <vector>
 
 #include "crunch/io/recording.h"
+#include "fuzz_check.h"
 
 using crunch::io::Chunk;
 using crunch::io::RecordingReader;
 
 namespace {
 
-void check(bool ok) {
-  if (!ok) std::abort();
-}
+using fuzz::check;
 
 // One scratch file per process, removed at exit (a plain array: it outlives every destructor).
 char g_path[64] = {};
@@ -43,7 +44,14 @@ const char* tempPath() {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::vector<std::uint8_t> file(data, data + size);
   if (size >= crunch::io::kRecordingHeaderBytes && (data[0] & 1u) != 0) {
-    // Repair mode: keep the real magic if the input starts with it, and a correct header CRC.
+    // Repair mode: keep the real magic if the input starts with it, and correct CRCs.
+    const std::size_t meta = static_cast<std::size_t>(file[12]) | (std::size_t{file[13]} << 8) |
+                             (std::size_t{file[14]} << 16) | (std::size_t{file[15]} << 24);
+    if (meta <= size - crunch::io::kRecordingHeaderBytes) {
+      const std::uint32_t mcrc =
+          crunch::io::crc32({file.data() + crunch::io::kRecordingHeaderBytes, meta});
+      for (int i = 0; i < 4; ++i) file[24 + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(mcrc >> (8 * i));
+    }
     const std::uint32_t crc = crunch::io::crc32({file.data(), 28});
     for (int i = 0; i < 4; ++i) file[28 + static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(crc >> (8 * i));
   }

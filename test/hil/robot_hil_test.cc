@@ -23,6 +23,7 @@
 #include "crunch/mapping/evaluation.h"
 #include "crunch/mapping/map_io.h"
 #include "crunch/scene/scene.h"
+#include "support/run_command.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -42,27 +43,15 @@ const HilScene kTwoTables{std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/hil_two
                           "--start-x 0.35 --start-y 0.35 --start-theta 0.785 --area-width 2.5 "
                           "--area-depth 2.5"};
 
-struct Run {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr, interleaved
-  double wall_s = 0.0;
-  json summary;        // crunch-virtual-robot's last line, if any
+struct Run : CommandRun {
+  json summary;  // crunch-virtual-robot's last line, if any
 };
 
 Run run(const std::string& command) {
   Run r;
-  const auto t0 = std::chrono::steady_clock::now();
-  FILE* p = popen((command + " 2>&1").c_str(), "r");
-  REQUIRE(p != nullptr);
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) r.output += buf;
-  const int status = pclose(p);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::istringstream lines(r.output);
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("{\"child_exit\"", 0) == 0) r.summary = json::parse(line);
-  }
+  static_cast<CommandRun&>(r) = runCommand(command);
+  if (auto line = lastLineStartingWith(r.output, "{\"child_exit\""); !line.empty())
+    r.summary = json::parse(line);
   return r;
 }
 
@@ -397,6 +386,22 @@ TEST_CASE("Robot: the bridge unplugged mid-run stops the robot, keeps the map an
   std::size_t roams = 0;
   for (std::size_t at = 0; (at = r.output.find("\"roaming\"", at)) != std::string::npos; ++at) ++roams;
   CHECK(roams >= 2);
+  // A "status" line at every running-map post (--map-every 5: about five in 25 s), what
+  // tools/soak.sh charts; the writes before the last line have been timed.
+  std::vector<json> status;
+  std::istringstream lines(r.output);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("{\"event\":\"status\"", 0) == 0) status.push_back(json::parse(line));
+  }
+  REQUIRE(status.size() >= 3);
+  const json& last = status.back();
+  CHECK(last["rss_kib"].get<long>() > 1000);
+  CHECK(last["ring_high_water"].get<long>() > 0);
+  CHECK(last["ring_dropped"] == 0);
+  CHECK(last["map_writes"].get<int>() >= 2);
+  CHECK(last["map_write_failures"] == 0);
+  CHECK(last["map_write_max_s"].get<double>() > 0.0);
+  CHECK(last["t"].get<double>() > status.front()["t"].get<double>());
 }
 
 TEST_CASE("Robot: corrupt frames and serial garbage are counted and never reach the pipeline",

@@ -283,6 +283,15 @@ TEST_CASE("Recording: the reader refuses files that are not good recordings, nam
     CHECK_THAT(e, Contains(path));
     CHECK_THAT(e, Contains("version " + std::to_string(crunch::io::kRecordingVersion + 1)));
   }
+  SECTION("a bit flip in the metadata that leaves valid JSON (issue 16)") {
+    const std::string path = dir.file("meta_flip.crec");
+    std::vector<std::uint8_t> v = bytes;
+    v[kRecordingHeaderBytes + 5] ^= 0x02;  // {"a":1} -> {"a":3}: still JSON, another setting
+    writeAll(path, v);
+    const std::string e = openError(path);
+    CHECK_THAT(e, Contains(path));
+    CHECK_THAT(e, Contains("metadata CRC mismatch"));
+  }
   SECTION("damaged length fields with a valid CRC") {
     const std::string path = dir.file("len.crec");
     std::vector<std::uint8_t> v = bytes;
@@ -448,4 +457,33 @@ TEST_CASE("Recording: write() and mark() after close() are errors, close() twice
   std::vector<Rec> got;
   CHECK(readAllRecords(*r.value(), got) == RecordingReader::Next::kEnd);
   CHECK(got.size() == 1);
+}
+
+TEST_CASE("Recording: a version-1 file (no metadata CRC) is still read, and said unprotected",
+          "[io][recording]") {
+  TempDir dir;
+  const std::string path = dir.file("v1.crec");
+  const std::vector<Rec> recs = makeRecords(5, 3);
+  writeRecording(path, recs, "{\"a\":1}");
+  {
+    auto now = RecordingReader::open(path);
+    REQUIRE(now.ok());
+    CHECK(now.value()->formatVersion() == crunch::io::kRecordingVersion);
+    CHECK(now.value()->metadataProtected());
+  }
+  // What version 1 wrote: version 1, bytes 24..27 zero (reserved), the header CRC over them.
+  std::vector<std::uint8_t> v = readAll(path);
+  v[8] = 1;
+  v[9] = 0;
+  put32(v, 24, 0);
+  rehashHeader(v);
+  writeAll(path, v);
+  auto old = RecordingReader::open(path);
+  REQUIRE(old.ok());
+  CHECK(old.value()->formatVersion() == 1);
+  CHECK_FALSE(old.value()->metadataProtected());
+  CHECK(old.value()->metadata() == "{\"a\":1}");
+  std::vector<Rec> got;
+  CHECK(readAllRecords(*old.value(), got) == RecordingReader::Next::kEnd);
+  CHECK(got.size() == recs.size());
 }

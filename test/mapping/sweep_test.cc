@@ -6,7 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -331,4 +333,49 @@ TEST_CASE("Sweep merge: explore shards' curves come back from their curves.csv",
   std::filesystem::remove(a.file("curves.csv"));
   CHECK_THAT(mergeSweepShards({a.path().string(), b.path().string()}).error().message,
              Catch::Contains("curves.csv"));
+}
+
+TEST_CASE("Sweep rows: a wrong type or a value out of range is refused, naming row and column "
+          "(issue 16)", "[sweep]") {
+  const SweepGrid g = buildSweepGrid(smallSpec()).value();
+  const SweepShard all = parseSweepShard("").value();
+  auto edited = [&](const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json rows = nlohmann::json::parse(sweepRowsJson({rowAt(g, 0, all), rowAt(g, 1, all)}));
+    edit(rows[1]);
+    const auto parsed = parseSweepRows(rows.dump(), "s/sweep.json");
+    return parsed ? std::string("(ok)") : parsed.error().message;
+  };
+  CHECK(edited([](nlohmann::json&) {}) == "(ok)");
+  CHECK_THAT(edited([](nlohmann::json& r) { r["precision"] = "high"; }),
+             Catch::Contains("s/sweep.json: row 2: precision: not the type"));
+  CHECK_THAT(edited([](nlohmann::json& r) { r["recall"] = 1.5; }),
+             Catch::Contains("row 2: recall: 1.5"));
+  CHECK_THAT(edited([](nlohmann::json& r) { r["wall_s"] = -3; }),
+             Catch::Contains("row 2: wall_s"));
+  CHECK_THAT(edited([](nlohmann::json& r) { r["shard"] = "0/2"; }),  // point 1 is not in 0/2
+             Catch::Contains("row 2: shard: grid point 1 is not in shard 0/2"));
+  CHECK_THAT(edited([](nlohmann::json& r) { r["shard"] = "2/1"; }),
+             Catch::Contains("row 2: shard: '2/1' is not i/n"));
+  CHECK_THAT(edited([](nlohmann::json& r) { r["matched"] = 99; }),
+             Catch::Contains("row 2: matched"));
+}
+
+TEST_CASE("Sweep merge: shards of different splits are refused even when they cover the grid "
+          "(issue 16)", "[sweep]") {
+  // 0/2 and 1/3 of a grid: points 0, 2, ... and 1, 4, ...; together they may cover a small grid
+  // exactly, but they are not parts of one sweep.
+  const SweepGrid g = buildSweepGrid(smallSpec()).value();
+  const SweepShard half = parseSweepShard("0/2").value();
+  std::vector<SweepRow> a_rows, b_rows;
+  for (size_t i = 0; i < g.size(); ++i) {
+    if (half.holds(i)) a_rows.push_back(rowAt(g, i, half));
+    else b_rows.push_back(rowAt(g, i, SweepShard{static_cast<int>(i % 3), 3}));
+  }
+  TempDir a, b;
+  writeText(a.file("sweep.json"), sweepRowsJson(a_rows));
+  writeText(b.file("sweep.json"), sweepRowsJson(b_rows));
+  const auto merged = mergeSweepShards({a.path().string(), b.path().string()});
+  REQUIRE_FALSE(merged);
+  CHECK_THAT(merged.error().message, Catch::Contains("is one of 3 shards") &&
+                                         Catch::Contains("not parts of the same sweep"));
 }

@@ -306,3 +306,25 @@ TEST_CASE("Models file: saving invalid models fails and keeps the old file", "[s
   CHECK_THAT(s.error().message, Catch::StartsWith(nowhere));
   CHECK(dir.entries().size() == 1);
 }
+
+TEST_CASE("Models file: values outside their physical ranges are refused, named (issue 16)",
+          "[signal]") {
+  const std::string radial = "models.json: radial.whiskers[2]";
+  // sigma 0 would make every reading but the line's own impossible.
+  CHECK_THAT(errorFor([](Json& d) { d["radial"]["whiskers"][2]["sigma"] = 0.0; }),
+             Catch::Contains(radial + ".sigma: expected a residual in (0, "));
+  CHECK_THAT(errorFor([](Json& d) { d["radial"]["whiskers"][2]["sigma"] = 5.0; }),
+             Catch::Contains(radial + ".sigma"));
+  // A slope of 1e308 m/rad predicts distances nowhere near the 14 cm whisker.
+  CHECK_THAT(errorFor([](Json& d) { d["radial"]["whiskers"][2]["a1"] = 1e308; }),
+             Catch::Contains(radial + ": a1, a0: the line predicts r = "));
+  CHECK_THAT(errorFor([](Json& d) { d["radial"]["whiskers"][2]["r_max"] = 3.0; }),
+             Catch::Contains(radial + ": r_min, r_max"));
+  CHECK_THAT(errorFor([](Json& d) { d["radial"]["whiskers"][2]["f1_min"] = -4.0; }),  // not a Hall angle
+             Catch::Contains(radial + ": f1_min, f1_max"));
+  // The window: 0 samples, or 10^8 (14 hours at 2 kHz).
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["window"]["samples"] = 0; }),
+             Catch::Contains("pipeline.window.samples"));
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["window"]["samples"] = 100000000; }),
+             Catch::Contains("pipeline.window.samples"));
+}

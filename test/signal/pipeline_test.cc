@@ -334,6 +334,10 @@ TEST_CASE("Pipeline: models must fit the window, options are validated", "[signa
   m.templates[0].mean = WindowMatrix::Zero(kChannels, 200);
   SignalModels models;
   models.orientation = m;
+  for (RadialLine& line : models.radial.whiskers) {  // a fitted line of the whisker's scale
+    line = {.a1 = -3.3, .a0 = 0.2, .sigma = 0.002, .samples = 30, .f1_min = 0.01,
+            .f1_max = 0.04, .r_min = 0.09, .r_max = 0.14};
+  }
   models.radial.whiskers[2].a1 = std::nan("");
   s = p.setModels(models);
   REQUIRE_FALSE(s.ok());

@@ -229,3 +229,75 @@ TEST_CASE("Create emulator: Safe mode stops and falls to Passive on a wheel drop
   CHECK(b.emu->mode() == oi::Mode::kPassive);
   CHECK(b.emu->counters().safety_stops == 1);
 }
+
+TEST_CASE("Create emulator: unsupported packet ids get no bytes, are skipped and counted",
+          "[sim][create]") {
+  Bench b;
+  b.send({oi::kStart, oi::kFull});
+  b.receive();
+  // Sensors(100): no Create 1 packet, no error reply in the manual: nothing comes back.
+  b.send(bytes(oi::sensors(100)));
+  CHECK(b.receive().empty());
+  CHECK(b.emu->counters().unsupported_ids == 1);
+  CHECK(b.emu->unsupportedIds().test(100));
+  // Query List of a Create 2 id between two Create 1 ids: the known ones answered, in order.
+  const std::array<std::uint8_t, 3> mixed = {oi::kOiMode, 43, oi::kRequestedVelocity};
+  b.send(bytes(oi::queryList(mixed).span()));
+  CHECK(b.receive() == std::vector<std::uint8_t>{3, 0, 0});
+  CHECK(b.emu->counters().unsupported_ids == 2);
+  // A Create 2 stream (43..58) with distance and mode: frames carry 19 and 35 only.
+  std::vector<std::uint8_t> stream_ids = {oi::kDistance};
+  for (std::uint8_t id = 43; id <= 58; ++id) stream_ids.push_back(id);
+  stream_ids.push_back(oi::kOiMode);
+  b.send(bytes(oi::stream(stream_ids).span()));
+  CHECK(b.emu->counters().unsupported_ids == 18);
+  for (std::uint8_t id = 43; id <= 58; ++id) CHECK(b.emu->unsupportedIds().test(id));
+  CHECK(b.emu->unsupportedIds().count() == 17);  // 43..58 and 100
+  const std::vector<std::uint8_t> kept(b.emu->streamIds().begin(), b.emu->streamIds().end());
+  CHECK(kept == std::vector<std::uint8_t>{oi::kDistance, oi::kOiMode});
+  b.run(0.1);
+  oi::SensorTracker tracker(oi::StreamParserOptions{true, 5});  // 19 + 2 bytes, 35 + 1 byte
+  tracker.feed(b.receive());
+  CHECK(tracker.packets() >= 6);
+  CHECK(tracker.packets() == b.emu->counters().packets_sent);
+  CHECK(tracker.counters().stream.skipped_bytes == 0);
+  // A stream of nothing the Create 1 has: no stream at all.
+  const std::array<std::uint8_t, 2> create2_only = {100, 101};
+  b.send(bytes(oi::stream(create2_only).span()));
+  CHECK_FALSE(b.emu->streaming());
+  CHECK(b.emu->counters().unsupported_ids == 20);
+  const auto sent = b.emu->counters().packets_sent;
+  b.run(0.1);
+  CHECK(b.emu->counters().packets_sent == sent);
+  CHECK(b.receive().empty());
+}
+
+TEST_CASE("Create emulator: a group id streams its members' data after the one group id",
+          "[sim][create]") {
+  Bench b;
+  b.send({oi::kStart, oi::kFull});
+  b.receive();
+  // Group 2 (packets 17..20: IR, buttons, distance, angle: 6 bytes), then 35.
+  const std::array<std::uint8_t, 2> ids = {2, oi::kOiMode};
+  b.send(bytes(oi::stream(ids).span()));
+  b.send(bytes(oi::drive(200, oi::kRadiusStraight)));
+  b.run(0.2);
+  const auto got = b.receive();
+  const std::size_t frame = 2 + (1 + 6) + (1 + 1) + 1;  // 19, n, [2, 6 bytes], [35, 1], checksum
+  REQUIRE(got.size() >= frame);
+  REQUIRE(got.size() % frame == 0);
+  int distance_mm = 0;
+  for (std::size_t at = 0; at < got.size(); at += frame) {
+    CHECK(got[at] == 19);
+    CHECK(got[at + 1] == 9);
+    CHECK(got[at + 2] == 2);
+    CHECK(got[at + 9] == oi::kOiMode);
+    CHECK(got[at + 10] == 3);
+    unsigned sum = 0;
+    for (std::size_t k = 0; k < frame; ++k) sum += got[at + k];
+    CHECK(sum % 256 == 0);  // the Create 1: header included
+    distance_mm += static_cast<std::int16_t>((got[at + 5] << 8) | got[at + 6]);
+  }
+  CHECK(std::abs(distance_mm - 40) <= 4);  // 0.2 m/s for 0.2 s, less what the last frame holds
+  CHECK(b.emu->counters().unsupported_ids == 0);
+}

@@ -109,7 +109,8 @@ Result<std::unique_ptr<RecordingWriter>> RecordingWriter::create(
   put16(h + 10, static_cast<std::uint16_t>(kRecordingHeaderBytes));
   put32(h + 12, static_cast<std::uint32_t>(metadata_json.size()));
   put64(h + 16, realtimeNs());
-  put32(h + 24, 0);  // reserved
+  put32(h + 24, crc32({reinterpret_cast<const std::uint8_t*>(metadata_json.data()),
+                       metadata_json.size()}));
   put32(h + 28, crc32({h, 28}));
   w->buffer_.insert(w->buffer_.end(), h, h + kRecordingHeaderBytes);
   w->buffer_.insert(w->buffer_.end(), metadata_json.begin(), metadata_json.end());
@@ -204,10 +205,11 @@ Result<std::unique_ptr<RecordingReader>> RecordingReader::open(const std::string
     return Error{"recording " + path + ": header CRC mismatch: the header is damaged"};
   }
   const std::uint16_t version = get16(h + 8);
-  if (version != kRecordingVersion) {
+  if (version < 1 || version > kRecordingVersion) {
     return Error{"recording " + path + ": format version " + std::to_string(version) +
-                 ", this crunchhost reads version " + std::to_string(kRecordingVersion)};
+                 ", this crunchhost reads versions 1 to " + std::to_string(kRecordingVersion)};
   }
+  r->version_ = version;
   const std::uint16_t header_len = get16(h + 10);
   const std::uint32_t meta_len = get32(h + 12);
   if (header_len != kRecordingHeaderBytes || meta_len > kMaxMetadata) {
@@ -217,6 +219,11 @@ Result<std::unique_ptr<RecordingReader>> RecordingReader::open(const std::string
   r->metadata_.resize(meta_len);
   if (meta_len > 0 && std::fread(r->metadata_.data(), 1, meta_len, f) != meta_len) {
     return Error{"recording " + path + ": ends inside its metadata: truncated"};
+  }
+  if (version >= 2 &&
+      get32(h + 24) != crc32({reinterpret_cast<const std::uint8_t*>(r->metadata_.data()),
+                              r->metadata_.size()})) {
+    return Error{"recording " + path + ": metadata CRC mismatch: the metadata is damaged"};
   }
   r->offset_ = kRecordingHeaderBytes + meta_len;
   return r;

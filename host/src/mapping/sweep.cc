@@ -592,22 +592,96 @@ std::string sweepRowsJson(const std::vector<SweepRow>& rows) {
   return arr.dump(1) + "\n";
 }
 
+namespace {
+
+// The first column of `row` whose JSON type is not the writer's (a default row's, where a
+// number may also be null: NaN), or "" when every type matches.
+std::string mistypedColumn(const Json& row) {
+  static const Json reference = Json::parse(sweepRowsJson({SweepRow{}}))[0];
+  for (const std::string& c : kSweepColumns) {
+    const Json& want = reference.at(c);
+    const Json& got = row.at(c);
+    const bool ok = want.is_string()              ? got.is_string()
+                    : want.is_number_unsigned()   ? got.is_number_unsigned()
+                    : want.is_number_integer()    ? got.is_number_integer()
+                                                  : got.is_number() || got.is_null();
+    if (!ok) return c;
+  }
+  return "";
+}
+
+// A row's values in the ranges the writer produces: the shard is "i/n" and holds the row's grid
+// point, fractions in [0, 1] (or NaN: nothing to measure), counts and costs non-negative.
+Status checkRowRanges(const SweepRow& r) {
+  if (r.grid_size < 1 || r.grid_index >= r.grid_size)
+    return Error{"grid_index: " + std::to_string(r.grid_index) + " is not a point of a grid of " +
+                 std::to_string(r.grid_size)};
+  auto shard = parseSweepShard(r.shard);
+  if (!shard || r.shard.empty()) return Error{"shard: '" + r.shard + "' is not i/n"};
+  if (r.grid_index % static_cast<size_t>(shard.value().count) !=
+      static_cast<size_t>(shard.value().index))
+    return Error{"shard: grid point " + std::to_string(r.grid_index) + " is not in shard " +
+                 r.shard};
+  const Evaluation& e = r.accuracy;
+  const std::pair<const char*, double> fractions[] = {
+      {"precision", e.precision}, {"recall", e.recall}, {"f1", e.f1},
+      {"per_pose_match_fraction", e.per_pose_match_fraction}};
+  for (const auto& [name, v] : fractions)
+    if (!std::isnan(v) && !(v >= 0.0 && v <= 1.0))
+      return Error{std::string(name) + ": " + std::to_string(v) + " is not in [0, 1]"};
+  const std::pair<const char*, double> nonnegative[] = {
+      {"sigma_r", r.sigma_r},
+      {"sigma_phi", r.sigma_phi},
+      {"travel_m", std::isnan(r.travel_m) ? 0.0 : r.travel_m},
+      {"mean_position_error_m", std::isnan(e.mean_position_error) ? 0.0 : e.mean_position_error},
+      {"mean_angle_error_rad", std::isnan(e.mean_angle_error) ? 0.0 : e.mean_angle_error},
+      {"wall_s", r.wall_s},
+      {"schedule_steps", r.schedule_steps},
+      {"sweeps", r.sweeps},
+      {"working_memory", r.working_memory},
+      {"poses", r.poses},
+      {"shapelets", r.shapelets},
+      {"whisks", r.whisks},
+      {"fused_tables", e.fused_tables},
+      {"true_tables", e.true_tables},
+      {"matched", e.matched},
+      {"phantoms_near_walls", e.phantoms_near_walls},
+      {"phantoms_elsewhere", e.phantoms_elsewhere},
+      {"proposals", static_cast<double>(r.proposals)},
+      {"peak_live_tables", r.peak_live_tables},
+      {"peak_live_legs", r.peak_live_legs},
+      {"process_peak_rss_kib", static_cast<double>(r.process_peak_rss_kib)}};
+  for (const auto& [name, v] : nonnegative)
+    if (!(v >= 0.0 && std::isfinite(v)))
+      return Error{std::string(name) + ": " + std::to_string(v) + " is not a finite number >= 0"};
+  if (e.matched > e.fused_tables || e.matched > e.true_tables)
+    return Error{"matched: " + std::to_string(e.matched) + " is more than fused_tables or "
+                 "true_tables"};
+  return okStatus();
+}
+
+}  // namespace
+
 Result<std::vector<SweepRow>> parseSweepRows(const std::string& text, const std::string& source) {
   if (auto st = checkStrictJson(text, source); !st) return st.error();
   const Json arr = Json::parse(text, nullptr, false);
   if (arr.is_discarded() || !arr.is_array()) return Error{source + ": not a JSON array"};
   std::vector<SweepRow> rows;
-  for (const Json& row : arr) {
+  for (size_t k = 0; k < arr.size(); ++k) {
+    const Json& row = arr[k];
+    const std::string where = source + ": row " + std::to_string(k + 1);
     bool ok = row.is_object() && row.size() == kSweepColumns.size();
     for (const std::string& c : kSweepColumns) ok = ok && row.contains(c);
-    if (ok) {
-      try {
-        rows.push_back(rowFromJson(row));
-        continue;
-      } catch (const nlohmann::json::exception&) {
-      }
+    if (!ok) return Error{where + ": not a sweep row (its columns differ from sweep.json's)"};
+    if (const std::string c = mistypedColumn(row); !c.empty())
+      return Error{where + ": " + c + ": not the type sweep.json gives it"};
+    try {
+      rows.push_back(rowFromJson(row));
+    } catch (const nlohmann::json::exception&) {  // a number out of its type's range
+      return Error{where + ": a value does not fit its column"};
     }
-    return Error{source + ": a row is not a sweep row (columns differ)"};
+    if (Status st = checkRowRanges(rows.back()); !st)
+      return Error{where + ": " + st.error().message};
   }
   return rows;
 }
@@ -672,6 +746,8 @@ Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& d
   std::optional<std::string> grid;
   std::optional<size_t> grid_size;
   std::string grid_from;
+  std::optional<int> shard_count;
+  std::string shard_from;
   std::vector<std::optional<SweepRow>> slots;
   std::vector<std::string> explored_dirs;
   for (const std::string& dir : dirs) {
@@ -694,6 +770,16 @@ Result<std::vector<SweepRow>> mergeSweepShards(const std::vector<std::string>& d
         return Error{dir + " is a shard of another grid (fingerprint " + row.grid + ", " +
                      std::to_string(row.grid_size) + " points) than " + grid_from + " (" + *grid +
                      ", " + std::to_string(*grid_size) + " points)"};
+      // Shards of one sweep split the grid the same way: 0/2 and 1/3 are not parts of one run.
+      const int count = parseSweepShard(row.shard).value().count;  // parseSweepRows checked it
+      if (!shard_count) {
+        shard_count = count;
+        shard_from = dir;
+      }
+      if (count != *shard_count)
+        return Error{dir + ": shard " + row.shard + " is one of " + std::to_string(count) +
+                     " shards, " + shard_from + "'s are of " + std::to_string(*shard_count) +
+                     ": not parts of the same sweep"};
       const size_t index = row.grid_index;
       if (index >= row.grid_size)
         return Error{path + ": grid_index " + std::to_string(index) + " out of range"};

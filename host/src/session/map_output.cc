@@ -1,5 +1,7 @@
 #include "crunch/session/map_output.h"
 
+#include <algorithm>
+#include <chrono>
 #include <nlohmann/json.hpp>
 #include <utility>
 
@@ -132,11 +134,22 @@ void MapWriter::loop() {
     Map map = std::move(*pending_);
     pending_.reset();
     lock.unlock();  // the write runs unlocked: post() never waits for a render or an fsync
-    if (auto st = writeMapFiles(map, area_hi_, out_dir_, title_); !st && on_error_) {
-      on_error_(st.error());
-    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const Status st = writeMapFiles(map, area_hi_, out_dir_, title_);
+    const double took =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!st && on_error_) on_error_(st.error());
     lock.lock();
+    ++stats_.writes;
+    stats_.failures += st ? 0 : 1;
+    stats_.last_s = took;
+    stats_.max_s = std::max(stats_.max_s, took);
   }
+}
+
+MapWriter::Stats MapWriter::stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stats_;
 }
 
 }  // namespace crunch::session

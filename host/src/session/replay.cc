@@ -19,6 +19,7 @@ Result<Replay> replayRecording(const std::string& path, int threads) {
   Replay r;
   r.options = std::move(options).value();
   r.session = std::move(created).value();
+  r.metadata_protected = rec.metadataProtected();
   io::Chunk chunk;
   io::RecordingReader::Next next;
   while ((next = rec.next(chunk)) == io::RecordingReader::Next::kRecord) {

@@ -41,8 +41,32 @@ Status validateModels(const SignalModels& models) {
     for (const auto& [key, v] : numbers) {
       if (!std::isfinite(v)) return Error{member(p, key) + ": not a finite number"};
     }
-    if (l.sigma < 0.0) return Error{member(p, "sigma") + ": negative"};
     if (l.samples < 0) return Error{member(p, "samples") + ": negative"};
+    // Physical ranges (issue 16), from the whisker's own length L = external_length: a fit's
+    // residual is a positive distance no longer than the whisker (sigma 0 would make every
+    // other reading impossible); f1 is a Hall angle; the training contacts lie on the whisker;
+    // and the line, over its own training range, predicts distances within one whisker length
+    // of the whisker (a1 = 1e308 does not).
+    const double L = radial.options.external_length;
+    if (!(l.sigma > 0.0 && l.sigma <= L)) {
+      return Error{member(p, "sigma") + ": expected a residual in (0, " + std::to_string(L) +
+                   "] m (the whisker's external_length), got " + std::to_string(l.sigma)};
+    }
+    if (!(l.f1_min <= l.f1_max && std::abs(l.f1_min) <= kPi && std::abs(l.f1_max) <= kPi)) {
+      return Error{p + ": f1_min, f1_max: expected angles in [-pi, pi] with f1_min <= f1_max"};
+    }
+    if (!(0.0 <= l.r_min && l.r_min <= l.r_max && l.r_max <= L)) {
+      return Error{p + ": r_min, r_max: expected 0 <= r_min <= r_max <= external_length (" +
+                   std::to_string(L) + " m)"};
+    }
+    for (const double f1 : {l.f1_min, l.f1_max}) {
+      const double r = l.predict(f1);
+      if (!(r >= -L && r <= 2.0 * L)) {
+        return Error{p + ": a1, a0: the line predicts r = " + std::to_string(r) + " m at f1 = " +
+                     std::to_string(f1) + ", more than a whisker length (" + std::to_string(L) +
+                     " m) off the whisker"};
+      }
+    }
   }
   const OrientationModel& o = models.orientation;
   if (o.decimation < 1) return Error{"orientation.decimation: expected >= 1"};

@@ -11,7 +11,17 @@
 //     only in Safe or Full, clamped like the Create (|velocity|, |wheel| <= 500 mm/s).
 //   - Stream (148) selects the packets and starts a packet every stream_period of the BODY's
 //     clock (body.now()); Pause/Resume (150) stops and restarts it; Sensors (142, ids 0..42)
-//     and Query List (149) are answered at once with the data bytes only.
+//     and Query List (149) are answered at once with the data bytes only. Group ids 0..6 are
+//     answered and streamed as their member packets' data in order (a stream frame carries the
+//     group id once, then its data), as the manual lists them.
+//   - unsupported packet ids (docs/CREATE.md, "Unsupported packet ids"): the Create 1's manual
+//     defines ids 0..42 only and has no error reply, so an id outside 0..42 in Sensors, Query
+//     List or Stream is skipped: it adds no byte to the answer or the frame, the other ids are
+//     served as if it had not been asked for, and a Stream of nothing but such ids streams
+//     nothing. Each such id is counted (counters().unsupported_ids) and remembered
+//     (unsupportedIds()), so the harness can tell the user why a reply is short. Stream ids past
+//     the 43rd (the manual's maximum count) or past a frame of 255 data bytes are skipped and
+//     counted the same way.
 //   - the other OI opcodes (LEDs, songs, scripts, ...) are parsed by length and ignored;
 //     bytes that are no opcode are counted and skipped.
 // then writes garbage queued by injectGarbage() and the stream packets due by body.now(),
@@ -35,6 +45,7 @@
 #pragma once
 
 #include <array>
+#include <bitset>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -60,6 +71,7 @@ struct CreateEmulatorCounters {
   std::uint64_t bytes_sent = 0;
   std::uint64_t bytes_dropped = 0;      // the pty was full (nobody reading)
   std::uint64_t safety_stops = 0;       // Safe mode stopped on a wheel drop
+  std::uint64_t unsupported_ids = 0;    // packet ids asked for and skipped (see the top)
 };
 
 class CreateEmulator {
@@ -92,6 +104,8 @@ class CreateEmulator {
   bool streaming() const { return stream_n_ > 0 && !paused_; }
   std::span<const std::uint8_t> streamIds() const { return {stream_ids_.data(), stream_n_}; }
   const CreateEmulatorCounters& counters() const { return counters_; }
+  // Bit `id` set for each unsupported packet id a client has asked for (see the top).
+  const std::bitset<256>& unsupportedIds() const { return unsupported_seen_; }
   const Options& options() const { return options_; }
   // The last Drive / Drive Direct as the Create reports it (packets 39..42).
   int requestedVelocity() const { return req_velocity_; }
@@ -110,6 +124,7 @@ class CreateEmulator {
   io::oi::SensorFrame snapshot(std::span<const std::uint8_t> ids);
   void answerSensors(std::span<const std::uint8_t> ids);
   void sendPacket();
+  void noteUnsupported(std::uint8_t id);
   void write(std::span<const std::uint8_t> bytes);
   void enterPassive();
 
@@ -139,6 +154,7 @@ class CreateEmulator {
   std::uint8_t drops_ = 0;
   std::vector<std::uint8_t> garbage_;  // queued by injectGarbage (test knob; may allocate)
   CreateEmulatorCounters counters_{};
+  std::bitset<256> unsupported_seen_{};
 };
 
 }  // namespace crunch::sim

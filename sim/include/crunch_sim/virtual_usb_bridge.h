@@ -21,6 +21,10 @@
 // Threads: the ioctl handler runs on umockdev's own testbed worker thread (a GLib main loop
 // that umockdev 0.17 starts for attached handlers), not on the caller's. push(), unplug(),
 // replug() and the counters are thread-safe.
+// Only the USB device nodes are emulated: create() removes umockdev's catch-all ioctl handler,
+// so any other file a preloaded process opens under /dev/ (a Create's pty, /dev/ttyUSB0) keeps
+// the kernel's ioctls (the .cc says why; docs/CREATE.md, "Your own Create client against the
+// virtual robot").
 // Preload: libusb sees the testbed only in a process that runs with libumockdev-preload.so.0
 // loaded (LD_PRELOAD, as umockdev-wrapper does). ensurePreloaded() re-executes a test binary
 // with it; a child process needs LD_PRELOAD=libumockdev-preload.so.0 and the inherited

@@ -130,7 +130,8 @@ DriveArgs twistToDrive(double v, double omega, double wheel_base = kWheelBase);
 // Writes a stream packet carrying `ids` with their values from `values` (see SensorFrame) into
 // `out`: 19, n, [id, data...]..., checksum. The checksum makes the byte sum zero mod 256 over
 // n..checksum, plus the header when `checksum_includes_header`. Returns the bytes written, or 0
-// if an id is unknown or `out` is too small. Used by the emulator and by tests.
+// if an id is unknown or `out` is too small. Used by tests (sim::CreateEmulator writes its own
+// frames, which may carry the group ids 0..6 that this codec does not accept).
 struct SensorFrame;
 std::size_t encodeStreamPacket(std::span<const std::uint8_t> ids, const SensorFrame& values,
                                bool checksum_includes_header, std::span<std::uint8_t> out);

@@ -4,8 +4,9 @@
 // control loop's marks (where one body whisk ended). Replaying the file through the same decoder,
 // OI parser, signal pipeline and mapper gives the same map, bit for bit.
 //
-// File: a 32-byte header (magic "CRUNCHRC", version, metadata length, start time, CRC-32), the
-// metadata (UTF-8 JSON: devices, program version, models), then records of
+// File: a 32-byte header (magic "CRUNCHRC", version, metadata length, start time, the metadata's
+// CRC-32 (version 2; 0 in version 1), the header's CRC-32), the metadata (UTF-8 JSON: devices,
+// program version, models, settings), then records of
 //   u8 stream | u8 0 | u16 size | u64 t_ns | size bytes | u32 CRC-32 of the 12 + size before it
 // all little-endian. t_ns is CLOCK_MONOTONIC when the bytes arrived, as the host saw it.
 //
@@ -60,7 +61,10 @@ struct Chunk {
   std::size_t assign(StreamId id, std::uint64_t t, std::span<const std::uint8_t> src);
 };
 
-inline constexpr std::uint16_t kRecordingVersion = 1;
+// Version 2 (issue 16) adds the metadata's own CRC-32 at header bytes 24..27, so a bit flip in
+// the settings that leaves valid JSON is found; version 1 files are still read, and said to be
+// unprotected (RecordingReader::metadataProtected).
+inline constexpr std::uint16_t kRecordingVersion = 2;
 inline constexpr std::size_t kRecordingHeaderBytes = 32;
 inline constexpr std::size_t kRecordHeaderBytes = 12;
 
@@ -110,8 +114,9 @@ class RecordingReader {
     kDamaged,    // damage at damage(); nothing more is read
   };
 
-  // Opens and checks the header (magic, version, header CRC, metadata length). Errors name the
-  // path and what is wrong: not a recording, a newer version, a damaged header.
+  // Opens and checks the header (magic, version, header CRC, metadata length) and, from version
+  // 2, the metadata's CRC. Errors name the path and what is wrong: not a recording, a newer
+  // version, a damaged header, damaged metadata.
   static Result<std::unique_ptr<RecordingReader>> open(const std::string& path);
   ~RecordingReader();
   RecordingReader(const RecordingReader&) = delete;
@@ -120,6 +125,10 @@ class RecordingReader {
   Next next(Chunk& out);
 
   const std::string& metadata() const { return metadata_; }
+  std::uint16_t formatVersion() const { return version_; }
+  // Whether the metadata carries its own CRC (version 2 on); a version-1 file's metadata could
+  // be damaged without the reader knowing.
+  bool metadataProtected() const { return version_ >= 2; }
   std::uint64_t startUnixNs() const { return start_unix_ns_; }
   std::uint64_t records() const { return records_; }
   // What the damage is and where ("recording F: record 1234 at byte 56789: CRC mismatch"),
@@ -132,6 +141,7 @@ class RecordingReader {
   std::string path_;
   std::FILE* file_ = nullptr;
   std::string metadata_;
+  std::uint16_t version_ = 0;
   std::uint64_t start_unix_ns_ = 0;
   std::uint64_t offset_ = 0;
   std::uint64_t records_ = 0;

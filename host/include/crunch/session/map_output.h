@@ -61,6 +61,16 @@ class MapWriter {
 
   void post(Map map);
 
+  // The writes so far and how long they took (wall seconds, render + fsync + rename): what a
+  // soak run charts (tools/soak.sh). Safe to call from any thread.
+  struct Stats {
+    int writes = 0;
+    int failures = 0;
+    double last_s = 0.0;
+    double max_s = 0.0;
+  };
+  Stats stats() const;
+
  private:
   void loop();
 
@@ -68,7 +78,8 @@ class MapWriter {
   std::string out_dir_;
   std::string title_;
   std::function<void(const Error&)> on_error_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
+  Stats stats_;  // under mutex_
   std::condition_variable cv_;
   std::optional<Map> pending_;
   bool stop_ = false;

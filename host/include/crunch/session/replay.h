@@ -24,6 +24,8 @@ struct Replay {
   Map map;                                // RobotSession::finish()
   std::uint64_t records = 0;              // records replayed
   std::string damage;                     // empty: the file ended cleanly
+  // False for a version-1 recording: its metadata (the settings) has no CRC of its own.
+  bool metadata_protected = true;
 };
 
 // `threads`: MappingOptions::threads of the replay (the metadata does not hold it: it is the
