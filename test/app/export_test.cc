@@ -2,12 +2,10 @@
 // --sim run read back against that run's map and scene, the CSV files of a real recording (the
 // golden one, test/golden/README.md) against its replay's report, and bad input: exit 2, the flag
 // or file named, nothing written; a damaged recording exports what it holds and exits 3.
-#include <sys/wait.h>
 #include <yaml-cpp/yaml.h>
 
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -16,6 +14,7 @@
 #include <vector>
 
 #include "crunch/scene/scene.h"
+#include "support/run_command.h"
 #include "support/temp_dir.h"
 
 namespace {
@@ -26,17 +25,13 @@ namespace fs = std::filesystem;
 const std::string kSource = CRUNCH_SOURCE_DIR;
 const std::string kHost = CRUNCHHOST;
 
-// Runs `command` in the project's root; returns its exit status, output in `out`.
+// Runs `command` in the project's root (support/run_command.h); returns its exit status, its
+// output in `out`.
 int run(const std::string& command, std::string* out = nullptr) {
-  FILE* p = popen(("cd '" + kSource + "' && " + command + " 2>&1").c_str(), "r");
-  REQUIRE(p != nullptr);
-  std::string text;
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p) != nullptr) text += buf;
-  const int status = pclose(p);
-  if (out != nullptr) *out = text;
-  INFO(text);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const CommandRun r = runCommand("cd '" + kSource + "' && " + command);
+  if (out != nullptr) *out = r.output;
+  INFO(r.output);
+  return r.exit_code;
 }
 
 std::string readText(const std::string& path) {
