@@ -28,7 +28,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   const crunch::session::RobotSessionOptions& o = options.value();
   check(o.validate().ok());
-  check(o.mapping.working_memory >= 1 && o.mapping.schedule_steps >= 1 &&
+  check(o.mapping.working_memory >= 1 && o.mapping.sampler.schedule_steps >= 1 &&
         o.mapping.global_chains >= 1);
   check(crunch::session::RobotSession::create(o).ok());
   const crunch::session::RecordingProvenance from{"1209:0001", "/dev/ttyUSB0", "m.json"};
