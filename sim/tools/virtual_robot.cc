@@ -39,6 +39,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "crunch/scene/scene.h"
@@ -136,8 +137,33 @@ int main(int argc, char** argv) {
   app.add_flag("--no-usb-preload", no_usb_preload,
                "start the child without the umockdev preload (it sees the Create, not the USB "
                "bridge)");
-  app.add_option("child", child, "the program to run, after --")->required();
-  CLI11_PARSE(app, argc, argv);
+  app.add_option("child", child, "the program to run, after --");
+  // Everything after the first `--` is the child's, verbatim: split here rather than left to
+  // CLI11, which ends a multi-value option such as `--start 1 1 0` at that `--` and then parses
+  // the child's own options (`--port`) as the harness's.
+  int own = argc;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string_view(argv[i]) == "--") {
+      own = i;
+      break;
+    }
+  }
+  try {
+    app.parse(own, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  if (own < argc) {
+    if (!child.empty()) {
+      std::cerr << "crunch-virtual-robot: the program to run goes after --, not before it\n";
+      return 2;
+    }
+    child.assign(argv + own + 1, argv + argc);
+  }
+  if (child.empty()) {
+    std::cerr << "crunch-virtual-robot: no program to run: give it after --\n";
+    return 2;
+  }
 
   auto scene = loadScene(scene_path);
   if (!scene) {

@@ -83,10 +83,11 @@ TEST_CASE("Virtual robot: an independent OI client on pyserial connects, streams
     return;
   }
   std::cout << "hil: virtual Create (crunch-virtual-robot, pty), client " << kClient << std::endl;
-  // Exactly the command of docs/CREATE.md, "Your own Create client" (the preload included).
-  const Run r = run(std::string(CRUNCH_VIRTUAL_ROBOT) + " --scene " + kScene +
-                    " --start 1 1 0 --time-limit 60 -- " + client +
-                    " --port {create} --probe-unsupported");
+  // The command of docs/CREATE.md, "Your own Create client" (the preload included), with a time
+  // limit put before it: `--start 1 1 0 -- client --port` exactly as documented (CLI11 alone
+  // once parsed the client's --port as the harness's there).
+  const Run r = run(std::string(CRUNCH_VIRTUAL_ROBOT) + " --time-limit 60 --scene " + kScene +
+                    " --start 1 1 0 -- " + client + " --port {create} --probe-unsupported");
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   REQUIRE(r.client.is_object());
