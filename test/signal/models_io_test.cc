@@ -19,7 +19,8 @@ using Json = nlohmann::json;
 
 namespace {
 
-SignalModels sampleModels() {
+// Templates of `columns` columns at decimation 20, with the pipeline window they come from.
+SignalModels sampleModels(int columns = 7) {
   SignalModels m;
   Rng rng(9);
   m.radial.options = {.external_length = 0.14, .tip_zone = 0.05};
@@ -35,15 +36,16 @@ SignalModels sampleModels() {
     l.r_max = 0.14;
   }
   m.orientation.decimation = 20;
-  m.orientation.columns = 7;
+  m.orientation.columns = columns;
   for (double a : defaultOrientationAngles()) {
     OrientationTemplate t;
     t.angle = a;
     t.windows = 3;
-    t.mean.resize(kChannels, 7);
+    t.mean.resize(kChannels, columns);
     for (Eigen::Index i = 0; i < t.mean.size(); ++i) t.mean.data()[i] = 0.01 * rng.normal();
     m.orientation.templates.push_back(t);
   }
+  m.pipeline.window = {20 * columns, 20};  // the windows the templates were trained on
   return m;
 }
 
@@ -125,8 +127,8 @@ TEST_CASE("Models file: the pipeline settings travel with the models", "[signal]
 TEST_CASE("Models file: a version-1 file reads with the pipeline it was trained with",
           "[signal]") {
   // Version 1 had no "pipeline": every such file was trained with the defaults and an onset
-  // threshold of kVersion1OnsetThreshold.
-  Json doc = Json::parse(modelsToJson(sampleModels()));
+  // threshold of kVersion1OnsetThreshold: templates of the default window's 200 columns.
+  Json doc = Json::parse(modelsToJson(sampleModels(200)));
   doc["version"] = 1;
   doc.erase("pipeline");
   doc.erase("ramp");
@@ -327,4 +329,12 @@ TEST_CASE("Models file: values outside their physical ranges are refused, named 
              Catch::Contains("pipeline.window.samples"));
   CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["window"]["samples"] = 100000000; }),
              Catch::Contains("pipeline.window.samples"));
+}
+
+TEST_CASE("Models file: templates of another window than the pipeline's are refused (issue 16)",
+          "[signal]") {
+  // Found by metadata_fuzz: such a file loaded, and only making the session failed.
+  CHECK_THAT(errorFor([](Json& d) { d["pipeline"]["window"]["samples"] = 280; }),
+             Catch::Contains("models.json: orientation: templates of decimation 20 and 7 columns, "
+                             "but pipeline.window records decimation 20 and 14 columns"));
 }

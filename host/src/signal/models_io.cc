@@ -85,6 +85,15 @@ Status validateModels(const SignalModels& models) {
   if (Status s = models.pipeline.validate(); !s.ok()) {
     return Error{"pipeline." + s.error().message};
   }
+  // The file's two halves agree: the templates were trained on the windows this pipeline
+  // records (SignalPipeline::setModels refuses them otherwise; found by metadata_fuzz).
+  const WindowOptions& w = models.pipeline.window;
+  if (o.decimation != w.decimation || o.columns != w.columns()) {
+    return Error{"orientation: templates of decimation " + std::to_string(o.decimation) + " and " +
+                 std::to_string(o.columns) + " columns, but pipeline.window records decimation " +
+                 std::to_string(w.decimation) + " and " + std::to_string(w.columns()) +
+                 " columns: the templates were trained with another window"};
+  }
   if (Status s = models.ramp.validate(); !s.ok()) return Error{"ramp." + s.error().message};
   return okStatus();
 }
