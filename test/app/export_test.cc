@@ -25,13 +25,9 @@ namespace fs = std::filesystem;
 const std::string kSource = CRUNCH_SOURCE_DIR;
 const std::string kHost = CRUNCHHOST;
 
-// Runs `command` in the project's root (support/run_command.h); returns its exit status, its
-// output in `out`.
+// `command` in the project's root: its exit status, its output in `out` (support/run_command.h).
 int run(const std::string& command, std::string* out = nullptr) {
-  const CommandRun r = runCommand("cd '" + kSource + "' && " + command);
-  if (out != nullptr) *out = r.output;
-  INFO(r.output);
-  return r.exit_code;
+  return exitStatusIn(kSource, command, out);
 }
 
 std::string readText(const std::string& path) {

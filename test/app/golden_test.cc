@@ -26,12 +26,9 @@ using json = nlohmann::json;
 
 const std::string kSource = CRUNCH_SOURCE_DIR;
 
-// Runs `command` in the project's root; returns its exit status, output in `out`.
+// `command` in the project's root: its exit status, its output in `out` (support/run_command.h).
 int run(const std::string& command, std::string* out = nullptr) {
-  const CommandRun r = runCommand("cd '" + kSource + "' && " + command);
-  if (out != nullptr) *out = r.output;
-  INFO(r.output);
-  return r.exit_code;
+  return exitStatusIn(kSource, command, out);
 }
 
 json readJson(const std::string& path) {

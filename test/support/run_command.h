@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 #include <string_view>
+#include <utility>
 
 struct CommandRun {
   int exit_code = -1;  // -1 when the command did not exit normally (a signal)
@@ -29,6 +30,19 @@ inline CommandRun runCommand(const std::string& command) {
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+
+// The same, run in `dir` (a test that runs the binaries on the project's own files).
+inline CommandRun runCommandIn(const std::string& dir, const std::string& command) {
+  return runCommand("cd '" + dir + "' && " + command);
+}
+
+// runCommandIn's exit status, its output in `*out` when given.
+inline int exitStatusIn(const std::string& dir, const std::string& command,
+                        std::string* out = nullptr) {
+  CommandRun r = runCommandIn(dir, command);
+  if (out != nullptr) *out = std::move(r.output);
+  return r.exit_code;
 }
 
 // The last line of `output` that starts with `prefix` (without its newline), or "".
