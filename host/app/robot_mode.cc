@@ -173,15 +173,13 @@ long residentKib() {
 // Create's watchdog stops, and the map writer's latency.
 json statusLine(const RobotSession& session, const Devices& d, const session::MapWriter& writer,
                 double t) {
-  std::uint64_t lost = 0;
-  for (const auto& b : session.decoderCounters().boards) lost += b.lost_frames;
   const session::MapWriter::Stats w = writer.stats();
   return {{"event", "status"},
           {"t", t},
           {"rss_kib", residentKib()},
           {"ring_high_water", d.ring.highWater()},
           {"ring_dropped", d.ring.dropped()},
-          {"lost_frames", lost},
+          {"lost_frames", session.decoderCounters().lostFrames()},
           {"watchdog_stops", d.create->watchdogStops()},
           {"map_writes", w.writes},
           {"map_write_failures", w.failures},
@@ -219,10 +217,7 @@ int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string
                  const exploration::ExplorationReport* exploration = nullptr) {
   OutputSet outputs;
   Status st = session::stageMapFiles(outputs, map, s.area_hi, out_dir, title, exploration);
-  if (st) {
-    auto file = outputs.add(out_dir + "/report.json");
-    st = file ? file.value()->write(report.dump(2) + "\n") : Status(file.error());
-  }
+  if (st) st = outputs.stage(out_dir + "/report.json", report.dump(2) + "\n");
   if (st) st = outputs.publish();
   if (!st) {
     err << "crunchhost: " << st.error().message << "\n";

@@ -82,23 +82,21 @@ Status writeOutputs(const SimOptions& opt, const sim::SimScene& scene, const sim
                     (run.exploration->teleport ? " --teleport" : " (driven)");
   }
   OutputSet outputs;
-  auto text = [&](const std::string& path, const std::string& contents) -> Status {
-    auto f = outputs.add(path);
-    if (!f) return f.error();
-    return f.value()->write(contents);
-  };
   auto picture = [&](const std::string& path, const auto& draw) -> Status {
     auto f = outputs.add(path);
     if (!f) return f.error();
     return draw(*f.value());
   };
   const std::function<Status()> writes[] = {
-      [&] { return text(dir + "map.json", mapToJson(run.map)); },
+      [&] { return outputs.stage(dir + "map.json", mapToJson(run.map)); },
       [&] {
         return picture(dir + "map.png",
                        [&](AtomicFile& f) { return renderMapPng(run.map, scene.scene, f, render); });
       },
-      [&] { return text(dir + "report.json", sim::simReportJson(scene.scene, run, ro, total_s)); },
+      [&] {
+        return outputs.stage(dir + "report.json",
+                             sim::simReportJson(scene.scene, run, ro, total_s));
+      },
       [&]() -> Status {
         if (!run.snapshot) return okStatus();
         const std::string base = dir + "snapshot_" + std::to_string(run.snapshot->pose_index);

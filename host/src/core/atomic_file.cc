@@ -214,6 +214,12 @@ Result<AtomicFile*> OutputSet::add(const std::string& path, AtomicFile::ErrorMes
   return files_.back().get();
 }
 
+Status OutputSet::stage(const std::string& path, std::string_view contents) {
+  Result<AtomicFile*> file = add(path);
+  if (!file) return file.error();
+  return file.value()->write(contents);
+}
+
 Status OutputSet::publish() {
   for (auto& f : files_) {
     if (Status s = f->seal(); !s) {

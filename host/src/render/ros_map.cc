@@ -231,12 +231,10 @@ Result<RosMapSummary> exportRosMap(const std::string& map_json, const std::strin
   sum.yaml_path = out_dir + "/map.yaml";
   // Both files complete and synced before either is renamed into place (OutputSet).
   OutputSet out;
-  auto pgm = out.add(sum.pgm_path);
-  if (!pgm) return failedWriting(pgm.error());
-  auto yaml = out.add(sum.yaml_path);
-  if (!yaml) return failedWriting(yaml.error());
-  if (auto st = pgm.value()->write(rosMapPgm(grid.value())); !st) return failedWriting(st.error());
-  if (auto st = yaml.value()->write(rosMapYaml(grid.value(), "map.pgm")); !st) {
+  if (auto st = out.stage(sum.pgm_path, rosMapPgm(grid.value())); !st) {
+    return failedWriting(st.error());
+  }
+  if (auto st = out.stage(sum.yaml_path, rosMapYaml(grid.value(), "map.pgm")); !st) {
     return failedWriting(st.error());
   }
   if (auto st = out.publish(); !st) return failedWriting(st.error());

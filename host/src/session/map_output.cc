@@ -26,9 +26,7 @@ Status stageMapFiles(OutputSet& outputs, const Map& map, const Vec2& area_hi,
   RenderOptions ropt;
   ropt.title = title;
   ropt.exploration = exploration;
-  auto json_file = outputs.add(out_dir + "/map.json");
-  if (!json_file) return json_file.error();
-  if (auto st = json_file.value()->write(mapToJson(map)); !st) return st;
+  if (auto st = outputs.stage(out_dir + "/map.json", mapToJson(map)); !st) return st;
   auto png_file = outputs.add(out_dir + "/map.png");
   if (!png_file) return png_file.error();
   return renderMapPng(map, area, *png_file.value(), ropt);
@@ -47,11 +45,6 @@ std::string sessionReportJson(const RobotSession& session, const Map& map) {
   const auto& c = session.counts();
   const auto& e = session.evidenceCounts();
   const auto t = session.tracker().counters();
-  std::uint64_t lost = 0, dropped = 0;
-  for (const auto& b : d.boards) {
-    lost += b.lost_frames;
-    dropped += b.dropped_samples;
-  }
   const Pose2 p = session.pose();
   json shapelets = json::array();
   for (const Shapelet& sh : map.shapelets) {
@@ -71,8 +64,8 @@ std::string sessionReportJson(const RobotSession& session, const Map& map) {
                          {"bad_version", d.bad_version},
                          {"bad_board", d.bad_board},
                          {"skipped_bytes", d.skipped_bytes},
-                         {"lost_frames", lost},
-                         {"dropped_samples", dropped}}},
+                         {"lost_frames", d.lostFrames()},
+                         {"dropped_samples", d.droppedSamples()}}},
                        {"samples",
                         {{"assembled", a.samples},
                          {"gap_placeholders", a.placeholders},

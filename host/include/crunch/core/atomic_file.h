@@ -85,6 +85,8 @@ class OutputSet {
  public:
   // A new AtomicFile for `path` to write into (write() or tempPath()), owned by the set.
   Result<AtomicFile*> add(const std::string& path, AtomicFile::ErrorMessage message = nullptr);
+  // add(path) with `contents` written: writeFileAtomic's staged twin.
+  Status stage(const std::string& path, std::string_view contents);
   // Seals every file, then renames each over its target. On a failure while sealing nothing is
   // published and every temporary is removed. Call at most once.
   Status publish();

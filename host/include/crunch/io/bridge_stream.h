@@ -70,6 +70,18 @@ struct BridgeStreamCounters {
   std::uint64_t bad_version = 0;    // CRC good, version is not BRIDGE_VERSION
   std::uint64_t bad_board = 0;      // CRC and version good, board id >= BRIDGE_MAX_BOARDS
   std::array<BoardCounters, BRIDGE_MAX_BOARDS> boards{};
+
+  // The boards' lost_frames and dropped_samples, summed.
+  std::uint64_t lostFrames() const {
+    std::uint64_t n = 0;
+    for (const BoardCounters& b : boards) n += b.lost_frames;
+    return n;
+  }
+  std::uint64_t droppedSamples() const {
+    std::uint64_t n = 0;
+    for (const BoardCounters& b : boards) n += b.dropped_samples;
+    return n;
+  }
 };
 // Invariant after every feed(): bytes == BRIDGE_FRAME_LEN * frames + skipped_bytes + pending(),
 // and frames == the sum of boards[b].frames.
