@@ -232,7 +232,7 @@ class RobotLiveFeed {
     state_.stage = stageName(c.stage());
     state_.t = secondsSince(t0_);
     for (const auto& [name, value] : status.items()) {
-      if (value.is_number()) state_.setCounter(name, value.get<double>());
+      if (value.is_number() && name != "t") state_.setCounter(name, value.get<double>());
     }
     state_.setCounter("whisks", session.counts().whisks);
     state_.setCounter("contact_reports", session.counts().reports);
@@ -415,6 +415,12 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
       return 3;
     }
     view = std::move(started).value();
+    serve::LiveState opening;  // until the run's own snapshots come
+    opening.mode = "robot";
+    opening.stage = "opening the devices";
+    opening.area_lo = plan.value().session.area_lo;
+    opening.area_hi = plan.value().session.area_hi;
+    view->publish(opening);
     (opt.json_progress ? out : err) << serve::servingLine(view->address(), opt.json_progress)
                                     << std::endl;
   }

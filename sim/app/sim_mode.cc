@@ -132,6 +132,7 @@ class SimLiveFeed {
     state_.mode = "sim";
     state_.stage = "mapping";
     state_.area_hi = {scene.width, scene.depth};
+    view_.publish(state_);  // the arena, before the first pose
   }
 
   void install(sim::SimRunOptions& ro) {

@@ -55,7 +55,7 @@ struct LiveState {
   static constexpr std::size_t kPathMaxPoints = 4000;
   static constexpr std::size_t kMaxContacts = 64;
 
-  std::string mode = "sim";
+  std::string mode;  // "robot" | "sim"; empty before the run says
   std::string stage;
   double t = 0.0;  // seconds since the run started
   bool done = false;
