@@ -298,11 +298,6 @@ int runExportMode(crunch::session::ExportOptions& o, const CLI::App& exp) {
 int runTopLevel(TopLevel& t, RobotOptions& ropt) {
   SimOptions& opt = t.sim_opt;
   if (!t.replay.empty()) {
-    if (opt.serve) {
-      std::cerr << "crunchhost: --serve: only with --sim or --robot (a replay is not watched "
-                   "live)\n";
-      return 2;
-    }
     ReplayOptions rp;
     rp.recording = t.replay;
     rp.out_dir = opt.out_dir;
@@ -382,6 +377,10 @@ int main(int argc, char** argv) {
   // From here on a signal that ends the process removes every output's temporary first.
   crunch::removeTempsOnSignals();
   const bool top_mode = top.sim || top.robot || !top.replay.empty();
+  if (top.sim_opt.serve && !top.sim && !top.robot) {
+    std::cerr << "crunchhost: --serve: only with --sim or --robot (the live view of a run)\n";
+    return 2;
+  }
   if (*export_cmd) {
     if (top_mode) {
       std::cerr << "crunchhost: export is a mode of its own: drop --sim/--robot/--replay\n";

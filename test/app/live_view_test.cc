@@ -165,6 +165,11 @@ TEST_CASE("Live view: a bad --serve is exit 2 naming it, a port in use exit 3, n
   CHECK(replay.exit_code == 2);
   CHECK_THAT(replay.output, Catch::Contains("--serve: only with --sim or --robot"));
   CHECK_FALSE(fs::exists(out));
+  const CommandRun sweep = run("--serve 8080 sweep --out " + out);
+  INFO(sweep.output);
+  CHECK(sweep.exit_code == 2);
+  CHECK_THAT(sweep.output, Catch::Contains("--serve: only with --sim or --robot"));
+  CHECK_FALSE(fs::exists(out));
 
   // A port another server holds: the run does not start.
   const int port = freeLoopbackPort();
