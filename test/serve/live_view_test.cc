@@ -230,5 +230,7 @@ TEST_CASE("Live view: publish() of a long run's state costs the run well under a
   std::cout << "live view: publish " << per_ms << " ms (" << s.path.size()
             << " path points); its document " << doc.size() << " bytes in " << json_ms
             << " ms on a server thread" << std::endl;
-  CHECK(per_ms < 1.0);  // a generous bound for a loaded CI machine; about 0.02 ms measured
+  // Against the Create's 0.5 s watchdog: measured 0.002 ms (Release), 0.4 ms (ASan, Debug) on a
+  // loaded machine; the bound leaves room for both.
+  CHECK(per_ms < 5.0);
 }
