@@ -170,6 +170,7 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
     run.map = runMapping(used, scene.poses, scene.skipped, mopt, o.observe).value();  // validated above
   }
   run.model = mopt.model;
+  run.mapping = mopt;
   run.evaluation = evaluate(run.map, scene.scene, matchToleranceFor(mopt.model));
   if (mopt.model.walled()) run.evaluation.walls = evaluateWalls(run.map, scene.scene);
   if (recorder) run.snapshot = recorder->snapshot();

@@ -102,6 +102,9 @@ struct SimRun {
   Evaluation evaluation;
   NoiseRegime noise;          // the regime the blackboard assumed (after the sensor's rule)
   ModelParams model;          // eq. 12's parameters as run (withSensorNoise)
+  // The mapping options as run: the sensor's rules applied (the physics sensor pools the chains
+  // unless --chain-fusion was given), for report.json `sampler`.
+  MappingOptions mapping;
   std::optional<PhysicsSummary> physics;
   std::optional<BlackboardSnapshot> snapshot;
   std::string warning;  // empty, or why an asked-for snapshot was not taken
