@@ -172,9 +172,15 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
          "ratio) | rj (reversible-jump Metropolis-Hastings with every move's proposal ratio; "
          "docs/BLACKBOARD.md)")
       ->default_str("paper");
-  app.add_option("--global-chains", opt.mapping.global_chains,
-                 "independent chains of the global inference; a table needs half to agree")
-      ->capture_default_str();
+  app.add_option_function<int>(
+         "--global-chains",
+         [&opt](int n) {
+           opt.mapping.global_chains = n;
+           opt.global_chains_given = true;
+         },
+         "independent chains of the global inference (default: 32 for the physics sensor, "
+         "else 8); a table needs half to agree (vote)")
+      ->default_str("8");
   app.add_option("--threads", opt.mapping.threads,
                  "threads the global inference's chains run on (0: one per core); the map is "
                  "the same for every count")

@@ -62,6 +62,7 @@ Result<sim::SimRunOptions> runOptions(const SimOptions& opt) {
   o.seed = opt.seed;
   o.mapping = opt.mapping;
   o.chain_fusion_given = opt.chain_fusion_given;
+  o.global_chains_given = opt.global_chains_given;
   o.snapshot_pose = opt.snapshot_pose;
   o.snapshot_temperature = opt.snapshot_temperature;
   auto explore = exploreOptions(opt);

@@ -26,6 +26,7 @@ struct SimOptions {
   bool json_progress = false;  // one JSON object per line on stdout instead of a progress bar
   MappingOptions mapping;
   bool chain_fusion_given = false;  // --chain-fusion given (SimRunOptions::chain_fusion_given)
+  bool global_chains_given = false;  // --global-chains given (SimRunOptions::global_chains_given)
   // --snapshot K: also write OUT/snapshot_K.png and .svg, the blackboard (paper Figs. 3-4) after
   // the annealing of pose K, K the 0-based index in the run's order of reachable poses (the
   // scene's pose list without the unreachable ones; K < the "poses" count of report.json). A

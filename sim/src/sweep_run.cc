@@ -48,6 +48,7 @@ SweepRow runPoint(const SweepGrid& g, const std::vector<SimScene>& scenes, size_
   o.mapping.threads = threads;  // never changes the row (global_chain.h)
   // The grid's fusion as given (vote unless --chain-fusion): the gaussian sensor's default.
   o.chain_fusion_given = true;
+  o.global_chains_given = true;
   o.world_mutex = &g_world_mutex;
   auto explore = sweepExploreOptions(g, p.explore);
   if (!explore) throw std::runtime_error(explore.error().message);  // validated before

@@ -62,6 +62,9 @@ struct SimScene {
   static SimScene build(Scene scene);
 };
 
+// Global chains for the physics sensor unless --global-chains is given (runSimulation).
+inline constexpr int kPhysicsGlobalChains = 32;
+
 struct SimRunOptions {
   SensorKind sensor = SensorKind::kGaussian;
   NoiseRegime noise = NoiseRegime::realistic();  // gaussian only (ideal and physics: see above)
@@ -72,6 +75,9 @@ struct SimRunOptions {
   // false: mapping.chain_fusion is replaced by the sensor's (pool for physics, else vote);
   // true (`--chain-fusion` given, or a sweep's grid): mapping.chain_fusion is used as it is.
   bool chain_fusion_given = false;
+  // false: mapping.global_chains is replaced by the sensor's (kPhysicsGlobalChains for physics,
+  // else as given); true (`--global-chains` given, or a sweep's grid): used as it is.
+  bool global_chains_given = false;
   // --snapshot K [--snapshot-temperature I] (render/blackboard_snapshot.h): K < poses.size(),
   // 0 <= I < schedule_steps, I only with K.
   std::optional<int> snapshot_pose;
