@@ -5,7 +5,8 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(CRUNCH_AREAS core robot scene signal io behaviour blackboard mapping exploration render session)
+set(CRUNCH_AREAS core robot scene signal io behaviour blackboard mapping exploration render session
+                 serve)
 set(crunch_area_targets "")
 foreach(area ${CRUNCH_AREAS})
   list(APPEND crunch_area_targets crunch_${area})
@@ -59,6 +60,6 @@ set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS
-    "libeigen3-dev, nlohmann-json3-dev, libyaml-cpp-dev, libcairo2-dev, libusb-1.0-0-dev, pkg-config, cmake")
+    "libeigen3-dev, nlohmann-json3-dev, libyaml-cpp-dev, libcairo2-dev, libusb-1.0-0-dev, libcpp-httplib-dev, pkg-config, cmake")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_STRICT_PERMISSION ON)
 include(CPack)

@@ -7,6 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libeigen3-dev libode-dev libcairo2-dev libusb-1.0-0-dev
   catch2 libbenchmark-dev libcli11-dev nlohmann-json3-dev libyaml-cpp-dev help2man file
+  libcpp-httplib-dev chromium
   gcc-avr avr-libc simavr
   umockdev libumockdev-dev
   python3-serial

@@ -110,6 +110,12 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
       ->capture_default_str();
   app.add_option("--out", opt.out_dir, "output directory")->capture_default_str();
   app.add_flag("--json", opt.json_progress, "machine-readable progress on stdout");
+  app.add_option("--serve", opt.serve,
+                 "serve a live view of the run (map, pose, path, contacts, counters) at "
+                 "ADDRESS: PORT or HOST:PORT or [IPV6]:PORT; PORT alone listens on loopback "
+                 "127.0.0.1 (this machine only); read-only: GET /, /state.json, /events "
+                 "(docs/LIVE_VIEW.md)")
+      ->type_name("ADDRESS");
   auto& s = opt.mapping.sampler;
   app.add_option("--schedule-steps", s.schedule_steps, "annealing temperatures")
       ->capture_default_str();
@@ -320,6 +326,7 @@ int runTopLevel(TopLevel& t, RobotOptions& ropt) {
     ropt.models_path = opt.models_path;
     ropt.json_progress = opt.json_progress;
     ropt.mapping = opt.mapping;
+    ropt.serve = opt.serve;
     return runRobot(ropt, std::cout, std::cerr);
   }
   if (!t.sim) {
@@ -340,7 +347,8 @@ int main(int argc, char** argv) {
       "  0  success\n"
       "  1  an output could not be written (e.g. disk full): no output is left half-written\n"
       "  2  bad input or setting: the file, field or option is named; nothing is written\n"
-      "  3  a device missing or a recording damaged: what was replayed is written, and said so\n"
+      "  3  a device missing or a recording damaged: what was replayed is written, and said so;\n"
+      "     or the --serve address cannot be listened on (in use): nothing run or written\n"
       "A SIGINT or SIGTERM before the end leaves no output (--robot: ends the run and writes it).");
   TopLevel top;
   RobotOptions ropt;
@@ -369,6 +377,10 @@ int main(int argc, char** argv) {
   // From here on a signal that ends the process removes every output's temporary first.
   crunch::removeTempsOnSignals();
   const bool top_mode = top.sim || top.robot || !top.replay.empty();
+  if (top.sim_opt.serve && !top.sim && !top.robot) {
+    std::cerr << "crunchhost: --serve: only with --sim or --robot (the live view of a run)\n";
+    return 2;
+  }
   if (*export_cmd) {
     if (top_mode) {
       std::cerr << "crunchhost: export is a mode of its own: drop --sim/--robot/--replay\n";

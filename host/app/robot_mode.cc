@@ -4,7 +4,9 @@
 
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
@@ -14,6 +16,7 @@
 #include "crunch/io/recording.h"
 #include "crunch/io/spsc_ring.h"
 #include "crunch/io/usb_bridge.h"
+#include "crunch/serve/live_view.h"
 #include "crunch/session/controller.h"
 #include "crunch/session/map_output.h"
 #include "crunch/session/replay.h"
@@ -45,6 +48,7 @@ struct RobotPlan {
   std::string models_path;
   RobotSessionOptions session;
   session::ControllerOptions control;
+  std::optional<serve::ServeAddress> serve;  // --serve
 };
 
 // The options onto the library's settings, each validated by the library (its errors name the
@@ -77,6 +81,11 @@ Result<RobotPlan> planRobot(const RobotOptions& opt) {
     c.explore = e;
   }
   if (auto st = c.validate(); !st) return Error{"--robot: " + st.error().message};
+  if (opt.serve) {
+    auto at = serve::parseServeAddress(*opt.serve);
+    if (!at) return at.error();
+    plan.serve = at.value();
+  }
   return plan;
 }
 
@@ -147,16 +156,96 @@ session::EventSink progressPrinter(bool json_progress, std::ostream& out) {
   };
 }
 
-// The control loop: steps the controller until it ends or a signal comes.
-void runLoop(session::RobotController& controller, const StopSignals& signals) {
+// The control loop: steps the controller until it ends or a signal comes; after_step (may be
+// empty) after each step.
+void runLoop(session::RobotController& controller, const StopSignals& signals,
+             const std::function<void()>& after_step) {
   while (true) {
     if (const int sig = signals.received(); sig != 0) {
       controller.stop(std::string("stopped by ") + StopSignals::name(sig));
       return;
     }
     if (!controller.step()) return;
+    if (after_step) after_step();
   }
 }
+
+const char* stageName(session::RobotController::Stage stage) {
+  using Stage = session::RobotController::Stage;
+  switch (stage) {
+    case Stage::kIdle: return "idle";
+    case Stage::kCalibrating: return "calibrating";
+    case Stage::kRoaming: return "roaming";
+    case Stage::kExploring: return "exploring";
+    case Stage::kPaused: return "paused (bridge lost)";
+    case Stage::kStopped: break;
+  }
+  return "stopped";
+}
+
+// --serve: the run as the live view shows it. The pose joins the path every step; a snapshot is
+// published at most every kPeriod (the pose, the stage, the --json status line's counters) and
+// the map is taken again after each whisk (RobotSession::snapshot(): no random draws, so the
+// map is the same with or without the view). The control loop only copies the state: the view's
+// threads serve it (serve/live_view.h).
+class RobotLiveFeed {
+ public:
+  static constexpr std::chrono::milliseconds kPeriod{200};
+
+  RobotLiveFeed(serve::LiveView& view, const RobotSessionOptions& s,
+                std::chrono::steady_clock::time_point t0)
+      : view_(view), t0_(t0) {
+    state_.mode = "robot";
+    state_.stage = "starting";
+    state_.area_lo = s.area_lo;
+    state_.area_hi = s.area_hi;
+    state_.moveTo(s.start);
+  }
+
+  // Every step of the loop; `status` makes the counters (statusLine) when a snapshot is due.
+  void step(const RobotSession& session, const session::RobotController& c,
+            const std::function<json()>& status) {
+    state_.moveTo(session.pose());
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_ < kPeriod) return;
+    last_ = now;
+    publish(session, c, status());
+  }
+
+  // The final map, after the outputs are written: the last snapshot (done).
+  void finish(const RobotSession& session, const session::RobotController& c, const Map& map,
+              const json& status) {
+    state_.moveTo(session.pose());
+    state_.setMap(map);
+    whisks_ = session.counts().whisks;
+    state_.done = true;
+    publish(session, c, status);
+  }
+
+ private:
+  void publish(const RobotSession& session, const session::RobotController& c,
+               const json& status) {
+    if (session.counts().whisks != whisks_) {
+      whisks_ = session.counts().whisks;
+      state_.setMap(session.snapshot());
+    }
+    state_.stage = stageName(c.stage());
+    state_.t = secondsSince(t0_);
+    for (const auto& [name, value] : status.items()) {
+      if (value.is_number() && name != "t") state_.setCounter(name, value.get<double>());
+    }
+    state_.setCounter("whisks", session.counts().whisks);
+    state_.setCounter("contact_reports", session.counts().reports);
+    state_.setCounter("bridge_frames", double(session.decoderCounters().frames));
+    state_.setCounter("create_packets", double(session.tracker().counters().stream.packets));
+    view_.publish(state_);
+  }
+
+  serve::LiveView& view_;
+  serve::LiveState state_;
+  std::chrono::steady_clock::time_point t0_, last_{};
+  int whisks_ = -1;
+};
 
 // The process's resident memory now (KiB, /proc/self/statm), -1 if unreadable.
 long residentKib() {
@@ -229,7 +318,7 @@ int writeOutputs(const Map& map, const RobotSessionOptions& s, const std::string
 // The run on open devices: the controller, the loop, the shut-down in order, the outputs.
 int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& session, Devices& d,
                io::RecordingWriter* recorder, std::chrono::steady_clock::time_point t0,
-               std::ostream& out, std::ostream& err) {
+               serve::LiveView* view, std::ostream& out, std::ostream& err) {
   // The running map goes to a writer thread (session/map_output.h says why).
   auto writer = std::make_unique<session::MapWriter>(
       p.session.area_hi, opt.out_dir, "crunchhost --robot (running)",
@@ -256,10 +345,16 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
   const StopSignals signals;  // from here to the end: SIGINT/SIGTERM stop the loop, not the process
   controller.start("whisker bridge " + opt.usb + " at " + d.usb->devicePath() + ", Create on " +
                    opt.create);
-  runLoop(controller, signals);
+  std::optional<RobotLiveFeed> feed;
+  if (view) feed.emplace(*view, p.session, t0);
+  const auto status_now = [&] { return statusLine(session, d, *writer, d.create->now()); };
+  runLoop(controller, signals, [&] {
+    if (feed) feed->step(session, controller, status_now);
+  });
 
   // ---- Shut down in order: motors, USB, the last chunks, the recording, the map.
   controller.stopMotion();
+  const json last_status = view ? status_now() : json();  // for the view's last snapshot
   writer.reset();  // waits for a write in progress; the final map is written below
   d.usb->stop();
   controller.drainBridge();
@@ -269,11 +364,11 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
   json report = robotReport(session, map, controller, d, recorder);
   if (!failure) report["error"] = failure.error().message;
   report["wall_s"] = secondsSince(t0);
-  if (writeOutputs(map, p.session, opt.out_dir,
-                   "crunchhost --robot, seed " + std::to_string(opt.seed), report, err,
-                   controller.explore() ? &controller.explore()->report() : nullptr) != 0) {
-    return 1;
-  }
+  const int written =
+      writeOutputs(map, p.session, opt.out_dir, "crunchhost --robot, seed " + std::to_string(opt.seed),
+                   report, err, controller.explore() ? &controller.explore()->report() : nullptr);
+  if (feed) feed->finish(session, controller, map, last_status);
+  if (written != 0) return 1;
   progress({"done", d.create->now(),
             controller.stopReason() + ": " + std::to_string(session.counts().whisks) + " whisks, " +
                 std::to_string(map.stats.shapelets) + " shapelets, " +
@@ -311,6 +406,24 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: --robot: --out " << s.error().message << "\n";
     return 2;
   }
+  // --serve: listening before a device is opened; an address that cannot be is exit 3.
+  std::unique_ptr<serve::LiveView> view;
+  if (plan.value().serve) {
+    auto started = serve::LiveView::start({.address = *plan.value().serve});
+    if (!started) {
+      err << "crunchhost: --robot: " << started.error().message << "\n";
+      return 3;
+    }
+    view = std::move(started).value();
+    serve::LiveState opening;  // until the run's own snapshots come
+    opening.mode = "robot";
+    opening.stage = "opening the devices";
+    opening.area_lo = plan.value().session.area_lo;
+    opening.area_hi = plan.value().session.area_hi;
+    view->publish(opening);
+    (opt.json_progress ? out : err) << serve::servingLine(view->address(), opt.json_progress)
+                                    << std::endl;
+  }
   removeStaleTemps(opt.out_dir, {"map.json", "map.png", "report.json"});
   Devices d;  // ---- both devices are tried, every missing one named: exit 3
   if (!openDevices(opt, plan.value(), d, err)) return 3;
@@ -320,7 +433,8 @@ int runRobot(const RobotOptions& opt, std::ostream& out, std::ostream& err) {
     return 1;
   }
   session.value()->setRecorder(recorder.value().get());
-  return driveRobot(opt, plan.value(), *session.value(), d, recorder.value().get(), t0, out, err);
+  return driveRobot(opt, plan.value(), *session.value(), d, recorder.value().get(), t0, view.get(),
+                    out, err);
 }
 
 // ------------------------------------------------------------------------------------------

@@ -22,7 +22,8 @@
 // is 3.
 //
 // Exit codes: 0 done; 2 bad option, models or recording header (nothing written); 3 a device
-// is missing or failed (the message names it and how to fix it), or the recording is damaged;
+// is missing or failed (the message names it and how to fix it), the recording is damaged, or
+// the --serve address cannot be listened on (nothing opened or written);
 // 1 an output could not be written.
 #pragma once
 
@@ -57,6 +58,10 @@ struct RobotOptions {
   // --explore POLICY [--travel-budget M] [--whisk-budget N]: the robot explores instead of
   // roaming (session/controller.h ControllerOptions::explore); validated by planRobot.
   std::optional<exploration::ExploreOptions> explore;
+  // --serve ADDRESS: a live view of the run (serve/live_view.h, docs/LIVE_VIEW.md), listening
+  // before the devices are opened. A bad address: exit 2; one that cannot be listened on: exit 3;
+  // nothing opened or written either way.
+  std::optional<std::string> serve;
 };
 
 struct ReplayOptions {

@@ -7,7 +7,9 @@
 
 #include "crunch/core/atomic_file.h"
 #include "crunch/mapping/map_io.h"
+#include "crunch/mapping/mapper.h"
 #include "crunch/render/map_render.h"
+#include "crunch/serve/live_view.h"
 #include "crunch/signal/models_io.h"
 #include "crunch_sim/sim_report.h"
 #include "crunch_sim/sim_run.h"
@@ -116,6 +118,79 @@ Status writeOutputs(const SimOptions& opt, const sim::SimScene& scene, const sim
   return outputs.publish();
 }
 
+// --serve: the run as the live view shows it, published at most every kPeriod of wall time: after
+// a mapped pose (with the mapper's snapshot(), which draws nothing: the map is the same with or
+// without the view) or, while a driven --explore run moves, with the pose alone; the final map
+// when the run ends. (A snapshot after every pose cost the default arena's 320-pose run 40% of
+// its time; at kPeriod it costs nothing measurable.)
+class SimLiveFeed {
+  static constexpr std::chrono::milliseconds kPeriod{100};
+
+ public:
+  SimLiveFeed(serve::LiveView& view, const Scene& scene, std::size_t poses_total)
+      : view_(view), t0_(std::chrono::steady_clock::now()), poses_total_(poses_total) {
+    state_.mode = "sim";
+    state_.stage = "mapping";
+    state_.area_hi = {scene.width, scene.depth};
+    view_.publish(state_);  // the arena, before the first pose
+  }
+
+  void install(sim::SimRunOptions& ro) {
+    ro.observe = [this](const Mapper& mapper, const Pose2& pose) {
+      state_.moveTo(pose);
+      state_.setCounter("whisks", mapper.poses());
+      if (poses_total_ > 0 && !explore_) state_.setCounter("poses_total", double(poses_total_));
+      mapper_ = &mapper;  // lives as long as the run: read again when the next snapshot is due
+      map_stale_ = true;
+      if (due()) publish();
+    };
+    explore_ = ro.explore.has_value();
+    if (explore_) {
+      ro.moved = [this](const Pose2& pose, double sim_t) {
+        state_.moveTo(pose);
+        state_.setCounter("sim_time_s", sim_t);
+        if (due()) publish();
+      };
+    }
+  }
+
+  // The final map; the last snapshot (done).
+  void finish(const sim::SimRun& run) {
+    mapper_ = nullptr;  // the run's mapper is gone
+    map_stale_ = false;
+    state_.setMap(run.map);
+    state_.stage = "done";
+    state_.done = true;
+    state_.setCounter("recall", run.evaluation.recall);
+    state_.setCounter("precision", run.evaluation.precision);
+    publish();
+  }
+
+ private:
+  bool due() const { return std::chrono::steady_clock::now() - last_ >= kPeriod; }
+
+  void publish() {
+    if (map_stale_ && mapper_ != nullptr) {
+      state_.setMap(mapper_->snapshot());
+      map_stale_ = false;
+    }
+    last_ = std::chrono::steady_clock::now();
+    state_.t = std::chrono::duration<double>(last_ - t0_).count();
+    state_.setCounter("tables", double(state_.tables.size()));
+    state_.setCounter("walls", double(state_.walls.size()));
+    state_.setCounter("shapelets", state_.shapelets);
+    view_.publish(state_);
+  }
+
+  serve::LiveView& view_;
+  serve::LiveState state_;
+  std::chrono::steady_clock::time_point t0_, last_{};
+  std::size_t poses_total_;
+  bool explore_ = false;
+  const Mapper* mapper_ = nullptr;  // the run's, while it runs
+  bool map_stale_ = false;          // a pose was mapped since the last snapshot
+};
+
 void printSummary(const SimOptions& opt, const sim::SimScene& scene, const sim::SimRun& run,
                   std::ostream& out) {
   const Evaluation& ev = run.evaluation;
@@ -157,15 +232,41 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: " << ro.error().message << "\n";
     return 2;
   }
+  std::optional<serve::ServeAddress> serve_at;
+  if (opt.serve) {
+    auto parsed = serve::parseServeAddress(*opt.serve);
+    if (!parsed) {
+      err << "crunchhost: " << parsed.error().message << "\n";
+      return 2;
+    }
+    serve_at = parsed.value();
+  }
   // A --out that cannot take the outputs is refused before the run, not after it.
   if (Status s = checkOutputTargets(opt.out_dir, {"map.json", "map.png", "report.json"}); !s) {
     err << "crunchhost: --out " << s.error().message << "\n";
     return 2;
   }
+  // --serve: listening before the run; an address that cannot be, before anything is written.
+  std::unique_ptr<serve::LiveView> view;
+  if (serve_at) {
+    auto started = serve::LiveView::start({.address = *serve_at});
+    if (!started) {
+      err << "crunchhost: " << started.error().message << "\n";
+      return 3;
+    }
+    view = std::move(started).value();
+    (opt.json_progress ? out : err) << serve::servingLine(view->address(), opt.json_progress)
+                                    << std::endl;
+  }
   removeStaleTemps(opt.out_dir, {"map.json", "map.png", "report.json"});
   PoseProgress bar(opt.json_progress ? out : err, opt.json_progress);
   ro.value().mapping.progress = [&bar](int done, int total) { bar(done, total); };
   const sim::SimScene scene = sim::SimScene::build(std::move(loaded).value());
+  std::optional<SimLiveFeed> feed;
+  if (view) {
+    feed.emplace(*view, scene.scene, scene.poses.size());
+    feed->install(ro.value());
+  }
   auto run = sim::runSimulation(scene, ro.value());
   if (!run) {
     err << "crunchhost: " << run.error().message << "\n";
@@ -178,6 +279,7 @@ int runSim(const SimOptions& opt, std::ostream& out, std::ostream& err) {
     err << "crunchhost: " << s.error().message << "\n";
     return 1;
   }
+  if (feed) feed->finish(run.value());
   printSummary(opt, scene, run.value(), out);
   return 0;
 }

@@ -44,9 +44,14 @@ struct SimOptions {
   std::optional<double> travel_budget;
   std::optional<int> whisk_budget;
   std::optional<std::string> start;
+  // --serve ADDRESS (serve/serve_address.h, docs/LIVE_VIEW.md): a live view of the run over
+  // HTTP while it runs. Checked before the run (a bad address: exit 2; one that cannot be
+  // listened on: exit 3; nothing written either way). Never changes the map.
+  std::optional<std::string> serve;
 };
 
-// Exit codes: 0 success; 2 bad input (scene, option) with nothing written; 1 failure to write.
+// Exit codes: 0 success; 2 bad input (scene, option) with nothing written; 1 failure to write;
+// 3 the --serve address cannot be listened on (nothing run or written).
 int runSim(const SimOptions& options, std::ostream& out, std::ostream& err);
 
 }  // namespace crunch::app

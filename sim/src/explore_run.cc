@@ -101,6 +101,7 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
     free_rays.clear();
     sensor.freeRays(free_rays);
     mapper.addPose(pose, reports, free_rays);
+    if (so.observe) so.observe(mapper, pose);
     for (const FreeRay& r : free_rays) known.markFreeRay(r);
     for (const ContactReport& r : reports) {
       if (r.whisker < 0 || r.whisker >= static_cast<int>(mounts.size()) || !std::isfinite(r.r)) continue;
@@ -222,8 +223,11 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
         }
       }
       if (auto st = loop.update(mask, mask ? &touch : nullptr); !st) return st.error();
-      auto lock = lockWorld(world_mutex);
-      base.step(so.dt);
+      {
+        auto lock = lockWorld(world_mutex);
+        base.step(so.dt);
+      }
+      if (so.moved) so.moved(base.odometry(), base.now());
     }
     run.report = loop.report();
   }

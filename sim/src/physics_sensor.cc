@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -222,11 +223,20 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   BodyWhisk whisk(robot, wopt);
   // Untouchable whisks: the whole whisk and the wait after it without ODE (see the header).
   const double checked = wopt.whisk_amplitude + kSkipHeadingSlack;  // each way from theta0
-  const bool skip = options_.skip_untouchable &&
-                    inPlaceWhiskClear(world_, mounts_, pose, -checked, checked,
-                                      options_.skip_margin);
-  if (skip) ++skipped_whisks_;
-  robot.setFreeRunning(skip);
+  // Whisker by whisker: those that cannot touch anything leave ODE, the others stay. Only from
+  // settled whiskers (no approach drive just ended), where the replay is exact.
+  std::uint32_t free_mask = 0;
+  if (options_.skip_untouchable && approach == 0.0) {
+    for (std::size_t w = 0; w < mounts_.size(); ++w) {
+      if (inPlaceWhiskClear(world_, std::span(&mounts_[w], 1), pose, -checked, checked,
+                            options_.skip_margin)) {
+        free_mask |= 1u << w;
+      }
+    }
+  }
+  if (free_mask == robot.allWhiskers()) ++skipped_whisks_;
+
+  robot.setFreeWhiskers(free_mask);
   // As the robot's control loop marks it: the whisk's episodes are the ones reported.
   chain.beginWhisk();
   (void)whisk.startInPlace(+1);  // the ray model's sweep: toward +A first
@@ -241,7 +251,7 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   for (long n = 0; n < max_steps; ++n) {
     const std::uint32_t before = chain.reportedMask();
     if (rig_->step() != nullptr) score(chain.reportedMask() & ~before);
-    if (robot.freeRunning() && std::abs(robot.odometry().theta - pose.theta) > checked) {
+    if (robot.freeWhiskers() != 0 && std::abs(robot.odometry().theta - pose.theta) > checked) {
       robot.setFreeRunning(false);  // outside what was checked: ODE again (never seen)
     }
     if (whisking) {

@@ -63,7 +63,7 @@ std::string simReportJson(const Scene& scene, const SimRun& run, const SimRunOpt
   if (run.physics) j["physics"] = physicsJson(*run.physics);
   if (run.exploration) j["exploration"] = exploration::explorationJson(*run.exploration);
   j["model"] = modelJson(run.model);
-  j["sampler"] = samplerJson(options.mapping);
+  j["sampler"] = samplerJson(run.mapping);
   return j.dump(2) + "\n";
 }
 

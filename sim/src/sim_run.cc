@@ -159,14 +159,18 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   }
   SensorModel& used = locked ? static_cast<SensorModel&>(*locked) : chosen;
   if (o.explore) {
-    auto explored = runExploration(scene, used, mopt, *o.explore, o.world_mutex);
+    ExploreSimOptions so;
+    so.moved = o.moved;
+    so.observe = o.observe;
+    auto explored = runExploration(scene, used, mopt, *o.explore, o.world_mutex, so);
     if (!explored) return explored.error();
     run.map = std::move(explored.value().map);
     run.exploration = std::move(explored.value().report);
   } else {
-    run.map = runMapping(used, scene.poses, scene.skipped, mopt).value();  // validated above
+    run.map = runMapping(used, scene.poses, scene.skipped, mopt, o.observe).value();  // validated above
   }
   run.model = mopt.model;
+  run.mapping = mopt;
   run.evaluation = evaluate(run.map, scene.scene, matchToleranceFor(mopt.model));
   if (mopt.model.walled()) run.evaluation.walls = evaluateWalls(run.map, scene.scene);
   if (recorder) run.snapshot = recorder->snapshot();

@@ -3,6 +3,7 @@
 #include <ode/ode.h>
 
 #include <algorithm>
+#include <bit>
 #include <cassert>
 #include <cmath>
 #include <cstdint>
@@ -273,8 +274,8 @@ void WhiskeredRobot::clearContacts() {
   std::fill(contact_count_.begin(), contact_count_.end(), 0);
 }
 
-void WhiskeredRobot::resetWhiskers() {
-  clearContacts();
+void WhiskeredRobot::resetWhiskers(std::uint32_t mask) {
+  if (mask == allWhiskers()) clearContacts();
 
   const double z = options_.z;
   setBaseBodies(0.0, 0.0, 0.0);
@@ -283,6 +284,7 @@ void WhiskeredRobot::resetWhiskers() {
   const double v = wheels_.v(), omega = wheels_.omega();
 
   for (size_t wi = 0; wi < mounts_.size(); ++wi) {
+    if (!(mask & (1u << wi))) continue;
     const WhiskerMount& m = mounts_[wi];
     Whisker& wh = whiskers_[wi];
     const double a = pose_.theta + m.bearing;
@@ -324,7 +326,7 @@ void WhiskeredRobot::place(const Pose2& pose) {
   assert(std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta));
   pose_ = pose;
   wheels_.halt();
-  resetWhiskers();
+  resetWhiskers(allWhiskers());
   bumped_ = world_.bodyCollides(pose_);
   // Straight at rest with the wheels stopped: the settled state of the zero command.
   command_ = stepped_ = Command{};
@@ -475,8 +477,9 @@ int WhiskeredRobot::substepsNeeded() const {
   // A capsule turning fast (a whisker flicking free of a deep bend) needs shorter steps: the
   // joints are solved at velocity level, and a large rotation within one step opens them.
   double fastest = 0.0;
-  for (const Whisker& wh : whiskers_) {
-    for (const BodyPtr& b : wh.bodies) {
+  for (size_t wi = 0; wi < whiskers_.size(); ++wi) {
+    if (free_mask_ & (1u << wi)) continue;  // not in ODE: its bodies hold stale velocities
+    for (const BodyPtr& b : whiskers_[wi].bodies) {
       const dReal* w = dBodyGetAngularVel(b.get());
       fastest = std::max(fastest, w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
     }
@@ -486,20 +489,39 @@ int WhiskeredRobot::substepsNeeded() const {
   return std::clamp(n, options_.substeps, options_.max_substeps);
 }
 
-void WhiskeredRobot::setFreeRunning(bool on) {
-  if (on == free_running_) return;
-  free_running_ = on;
-  if (on) {
-    clearContacts();
+void WhiskeredRobot::enableInOde(size_t w, bool on) {
+  Whisker& wh = whiskers_[w];
+  // All of the island: a disabled body reached through an enabled joint would be enabled again
+  // by ODE's island search (its auto-enable), and the follicle alone would seed an island.
+  for (BodyPtr& b : wh.bodies) on ? dBodyEnable(b.get()) : dBodyDisable(b.get());
+  on ? dBodyEnable(wh.follicle.get()) : dBodyDisable(wh.follicle.get());
+  for (JointPtr& j : wh.joints) on ? dJointEnable(j.get()) : dJointDisable(j.get());
+  for (GeomPtr& g : wh.geoms) on ? dGeomEnable(g.get()) : dGeomDisable(g.get());
+}
+
+void WhiskeredRobot::setFreeWhiskers(std::uint32_t mask) {
+  mask &= allWhiskers();
+  if (mask == free_mask_) return;
+  const std::uint32_t freed = mask & ~free_mask_, back = free_mask_ & ~mask;
+  if (freed != 0) {
+    if (mask == allWhiskers()) clearContacts();
     // Hold the angles ODE has now: the settled value of the current command if the whiskers have
-    // settled (since_change_ saturated), else a ringing whisker frozen mid-swing (counted).
-    for (int w = 0; w < whiskerCount(); ++w) {
-      free_angles_[static_cast<size_t>(w)] = odeBaseAngles(w);
+    // settled (since_change_ saturated), else a ringing whisker frozen mid-swing (counted). A
+    // whisker freed while others replay a change joins the replay (counted unless settled).
+    for (size_t w = 0; w < whiskers_.size(); ++w) {
+      if (!(freed & (1u << w))) continue;
+      free_angles_[w] = odeBaseAngles(static_cast<int>(w));
+      enableInOde(w, false);
     }
-    replay_ = nullptr;
+    if (free_mask_ == 0) replay_ = nullptr;
     if (since_change_ < response_steps_) ++inexact_free_changes_;
-  } else {
-    resetWhiskers();
+  }
+  free_mask_ = mask;
+  if (back != 0) {
+    for (size_t w = 0; w < whiskers_.size(); ++w) {
+      if (back & (1u << w)) enableInOde(w, true);
+    }
+    resetWhiskers(back);
   }
 }
 
@@ -540,35 +562,36 @@ const WhiskeredRobot::FreeResponse& WhiskeredRobot::freeResponse(const Command& 
   return free_responses_.back();
 }
 
-void WhiskeredRobot::freeStep() {
-  // The base exactly as substep() moves it; no collision, no dynamics (see the header).
-  if (!(command_ == stepped_)) {
-    if (since_change_ < response_steps_) ++inexact_free_changes_;
-    replay_ = &freeResponse(stepped_, command_);
+void WhiskeredRobot::step() {
+  const bool changed = !(command_ == stepped_);
+  if (changed) {
+    if (free_mask_ != 0) {
+      if (since_change_ < response_steps_) ++inexact_free_changes_;
+      replay_ = &freeResponse(stepped_, command_);
+    }
     since_change_ = 0;
   }
-  const double h = options_.dt / options_.substeps;
-  for (int i = 0; i < options_.substeps; ++i) {
-    moveBase(h);
-    time_ += h;
-  }
-  if (replay_ != nullptr) {
-    const long i = std::min(since_change_, response_steps_ - 1);  // then hold the settled value
-    const BaseAngles* row = &replay_->angles[static_cast<size_t>(i) * mounts_.size()];
-    std::copy(row, row + mounts_.size(), free_angles_.begin());
-  }
-  ++free_steps_;
-}
-
-void WhiskeredRobot::step() {
-  if (free_running_) {
-    freeStep();
+  if (free_mask_ == allWhiskers()) {
+    // The base exactly as substep() moves it; no collision, no dynamics (see the header).
+    const double h = options_.dt / options_.substeps;
+    for (int i = 0; i < options_.substeps; ++i) {
+      moveBase(h);
+      time_ += h;
+    }
+    ++free_steps_;
   } else {
-    if (!(command_ == stepped_)) since_change_ = 0;
     const int n = substepsNeeded();
     if (n > options_.substeps) ++refined_steps_;
     const double h = options_.dt / n;
     for (int i = 0; i < n; ++i) substep(h);
+    partly_free_whisker_steps_ += std::popcount(free_mask_);
+  }
+  if (free_mask_ != 0 && replay_ != nullptr) {
+    const long i = std::min(since_change_, response_steps_ - 1);  // then hold the settled value
+    const BaseAngles* row = &replay_->angles[static_cast<size_t>(i) * mounts_.size()];
+    for (size_t w = 0; w < mounts_.size(); ++w) {
+      if (free_mask_ & (1u << w)) free_angles_[w] = row[w];
+    }
   }
   stepped_ = command_;
   since_change_ = std::min(since_change_ + 1, response_steps_);
@@ -582,7 +605,7 @@ int WhiskeredRobot::run(double seconds) {
 
 BaseAngles WhiskeredRobot::baseAngles(int w) const {
   assert(w >= 0 && w < whiskerCount());
-  return free_running_ ? free_angles_[static_cast<size_t>(w)] : odeBaseAngles(w);
+  return (free_mask_ & (1u << w)) ? free_angles_[static_cast<size_t>(w)] : odeBaseAngles(w);
 }
 
 BaseAngles WhiskeredRobot::odeBaseAngles(int w) const {
@@ -636,7 +659,7 @@ Eigen::Vector3d WhiskeredRobot::basePoint(int w) const {
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> WhiskeredRobot::segmentEnds(int w, int i) const {
   assert(w >= 0 && w < whiskerCount() && i >= 0 && i < segmentCount());
-  if (free_running_) {  // the straight whisker on the base
+  if (free_mask_ & (1u << w)) {  // the straight whisker on the base
     const WhiskerMount& m = mounts_[static_cast<size_t>(w)];
     const Vec2 base = pose_.toWorld(m.base);
     const double a = pose_.theta + m.bearing;

@@ -101,9 +101,20 @@ TEST_CASE("Blackboard: a wall joins the shapelets' noisy-OR and pays its prior a
   const int32_t f = bb.addTable({1.0, 0.5 + 0.25, 0.0});
   const double in_front = bb.totalEnergy() - e1;
   bb.killTable(f);
+  // From in front: one whose fit sits 5 mm too deep (less than the wall's least thickness,
+  // wall_solid_depth) is not charged; one standing through the wall (its centre in front, its
+  // far half behind the surface) is.
+  const int32_t pressed = bb.addTable({1.0, 0.5 + 0.25 - 0.005, 0.0});
+  const double pressed_in = bb.totalEnergy() - e1;
+  bb.killTable(pressed);
+  const int32_t through = bb.addTable({1.0, 0.5 + 0.1, 0.0});
+  const double through_wall = bb.totalEnergy() - e1;
+  bb.killTable(through);
   bb.addTable({1.0, 0.5 - 0.02 - 0.25, 0.0});
   const double beyond = bb.totalEnergy() - e1;
   CHECK(behind - in_front == Approx(std::log(p.eps_b)));
+  CHECK(pressed_in == Approx(in_front));
+  CHECK(through_wall - in_front == Approx(std::log(p.eps_b)));
   CHECK(beyond == Approx(in_front));
   bb.killWall(id);
   CHECK(bb.liveWalls() == 0);

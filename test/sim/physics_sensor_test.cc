@@ -35,6 +35,7 @@ struct Sensed {
   std::vector<std::vector<FreeRay>> free;            // per pose
   int skipped = 0;
   int episodes = 0;
+  long long partly_free = 0;  // whisker-steps free-running beside whiskers in ODE
 };
 
 // The one-table scene (3 x 3 m, the standard table at the centre): whisks that touch a leg, each
@@ -69,6 +70,7 @@ Sensed run(bool skip) {
   }
   s.skipped = sensor.value()->skippedWhisks();
   s.episodes = sensor.value()->errors().episodes;
+  s.partly_free = sensor.value()->rig().robot().partlyFreeWhiskerSteps();
   return s;
 }
 
@@ -89,6 +91,10 @@ TEST_CASE("PhysicsSensor: skipping untouchable whisks senses what ODE senses", "
   REQUIRE(ode.reports.size() == n);
   CHECK(ode.skipped == 0);
   CHECK(skipped.skipped == 2);  // the two free whisks, and only those
+  // In the two touching whisks the whiskers on the far side cannot reach the leg: they run free
+  // while the near ones run in ODE (setFreeWhiskers), and nothing sensed changes either.
+  CHECK(ode.partly_free == 0);
+  CHECK(skipped.partly_free > 0);
   CHECK(skipped.episodes == ode.episodes);
   int reports = 0;
   for (std::size_t i = 0; i < n; ++i) {

@@ -391,15 +391,27 @@ double Blackboard::wallFreeTerm(const Vec2& a, const Vec2& b) const {
 bool Blackboard::inWallSolid(const OrientedRect& r, const WallHyp& w) const {
   const double len = w.length();
   if (len <= 0.0) return false;
-  // Behind the surface (its centre on the solid side: a thing standing against the wall's free
-  // face has its centre in front, whatever the noise of the two fits) and reaching into the
-  // band [0, wall_solid_depth] behind it (so a thing beyond a thin wall does not count).
+  // Two ways to share space with a wall, both within its extent:
+  //  - behind its surface (the centre on the solid side) and reaching into the band
+  //    [0, wall_solid_depth] behind it: a thing beyond a thin wall does not count;
+  //  - in front of it (the centre on the free side) and reaching past that band: through the
+  //    wall's least thickness, which no table top or leg can do. A thing standing against the
+  //    free face with a fit a little too deep (the two fits' noise, millimetres) is not charged.
+  // The second rule closes what the first left open: a table whose near legs were touched and
+  // whose far half stands through the arena's wall (its far legs never touchable, so nothing
+  // denied them) kept its centre in front and paid nothing.
   const Vec2 n = w.solidNormal();
-  if ((r.pose.position() - w.a).dot(n) <= 0.0) return false;
   const double d = p_.wall_solid_depth;
-  const Vec2 c = 0.5 * (w.a + w.b) + (0.5 * d) * n;
-  const OrientedRect band{{c.x(), c.y(), w.angle()}, len, d};
-  return overlaps(r, band);
+  const double centre_depth = (r.pose.position() - w.a).dot(n);
+  if (centre_depth > 0.0) {
+    const Vec2 c = 0.5 * (w.a + w.b) + (0.5 * d) * n;
+    return overlaps(r, OrientedRect{{c.x(), c.y(), w.angle()}, len, d});
+  }
+  // Past the band: from depth d to the deepest r can reach (its half-diagonal past its centre).
+  const double deepest = centre_depth + 0.5 * std::hypot(r.size_x, r.size_y);
+  if (deepest <= d) return false;
+  const Vec2 c = 0.5 * (w.a + w.b) + (0.5 * (d + deepest)) * n;
+  return overlaps(r, OrientedRect{{c.x(), c.y(), w.angle()}, len, deepest - d});
 }
 
 double Blackboard::wallTerms(int32_t id, const Touched& t) const {

@@ -26,6 +26,11 @@ std::pair<Vec2, Vec2> reachOf(const std::vector<Pose2>& poses, const std::vector
 
 Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
                        const MappingOptions& options) {
+  return runMapping(sensor, poses, skipped, options, MapperObserver());
+}
+
+Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
+                       const MappingOptions& options, const MapperObserver& observe) {
   if (auto s = options.validate(); !s) return s.error();
   Rng sense_rng(options.seed);
   const auto [lo, hi] = reachOf(poses, sensor.mounts());
@@ -38,6 +43,7 @@ Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int
     free_rays.clear();
     sensor.freeRays(free_rays);
     mapper.addPose(poses[t], reports, free_rays);
+    if (observe) observe(mapper, poses[t]);
     if (options.progress) options.progress(static_cast<int>(t + 1), static_cast<int>(poses.size()));
   }
   Map map = mapper.finish();

@@ -19,11 +19,13 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <mutex>
 
 #include "crunch/exploration/exploration.h"
 #include "crunch/mapping/map.h"
 #include "crunch/mapping/mapping_options.h"
+#include "crunch/mapping/run_mapping.h"
 #include "crunch/mapping/sensor_model.h"
 #include "crunch_sim/sim_run.h"
 
@@ -32,6 +34,11 @@ namespace crunch::sim {
 struct ExploreSimOptions {
   double dt = 0.02;                 // s of simulated time per control step
   double max_sim_time_s = 6 * 3600.0;  // the run ends here whatever the policy says
+  // Driven runs: called after every control step with the base's pose and simulated time (a
+  // live view's path, `--serve`); reads only, so the run is the same with or without it.
+  std::function<void(const Pose2& pose, double sim_t)> moved;
+  // Called after each whisk is mapped, with the mapper (read-only; runMapping's MapperObserver).
+  MapperObserver observe;
 };
 
 struct ExploreRun {

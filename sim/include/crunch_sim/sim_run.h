@@ -25,6 +25,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -35,6 +36,7 @@
 #include "crunch/mapping/evaluation.h"
 #include "crunch/mapping/map.h"
 #include "crunch/mapping/mapping_options.h"
+#include "crunch/mapping/run_mapping.h"
 #include "crunch/mapping/sensor_model.h"
 #include "crunch/render/map_render.h"
 #include "crunch/scene/scene.h"
@@ -79,6 +81,12 @@ struct SimRunOptions {
   // scene's pose list visited in order by teleporting, the paper's §2.8 run (every figure and
   // golden file so far).
   std::optional<exploration::ExploreOptions> explore;
+  // A live view of the run (`--serve`): observe after each pose is mapped, with the mapper
+  // (runMapping's MapperObserver; its snapshot() draws nothing, so the map is the same with or
+  // without it); moved after every control step of a driven --explore run. Not the physics
+  // run's gaussian comparison. Empty: nothing called.
+  MapperObserver observe;
+  std::function<void(const Pose2& pose, double sim_t)> moved;
 };
 
 // The physics path's own measurements, and the gaussian run on the same scene beside them.
@@ -94,6 +102,9 @@ struct SimRun {
   Evaluation evaluation;
   NoiseRegime noise;          // the regime the blackboard assumed (after the sensor's rule)
   ModelParams model;          // eq. 12's parameters as run (withSensorNoise)
+  // The mapping options as run: the sensor's rules applied (the physics sensor pools the chains
+  // unless --chain-fusion was given), for report.json `sampler`.
+  MappingOptions mapping;
   std::optional<PhysicsSummary> physics;
   std::optional<BlackboardSnapshot> snapshot;
   std::string warning;  // empty, or why an asked-for snapshot was not taken

@@ -78,6 +78,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -185,10 +186,28 @@ class WhiskeredRobot final : public MobileBase {
   // puts every whisker straight on the base at the current pose, moving rigidly with it (the
   // base's current v and omega), and the next step() is an ODE step again. Calling it with the
   // current state does nothing. place() works in both states and keeps it.
-  void setFreeRunning(bool on);
-  bool freeRunning() const { return free_running_; }
-  // Steps taken free-running.
+  void setFreeRunning(bool on) { setFreeWhiskers(on ? allWhiskers() : 0u); }
+  // True when every whisker is free-running.
+  bool freeRunning() const { return free_mask_ != 0 && free_mask_ == allWhiskers(); }
+  // Free-running whisker by whisker (bit w: whisker w), for stretches in which the caller has
+  // shown that those whiskers cannot touch a wall or leg while the others may. Each whisker is
+  // its own ODE island (Whisker::follicle), so leaving a free one out of dWorldStep (its bodies,
+  // follicle, joints and capsule geoms disabled) leaves the others' solution as it was: the same
+  // island, built in the same order. A free whisker's baseAngles() replay its free response as
+  // above and it has no contacts; the whiskers left in ODE step as before, with the adaptive
+  // refinement judged on them alone (a free whisker rings far below its threshold). Turning a
+  // whisker back to ODE puts it straight on the base at the current pose, moving rigidly with
+  // it. setFreeRunning(on) is setFreeWhiskers(all or none). Bits beyond the whiskers are ignored.
+  void setFreeWhiskers(std::uint32_t mask);
+  std::uint32_t freeWhiskers() const { return free_mask_; }
+  // Every whisker's bit.
+  std::uint32_t allWhiskers() const {
+    return whiskers_.size() >= 32 ? ~0u : (1u << whiskers_.size()) - 1u;
+  }
+  // Steps taken with every whisker free-running.
   long long freeSteps() const { return free_steps_; }
+  // Whisker-steps taken free-running while another whisker ran in ODE.
+  long long partlyFreeWhiskerSteps() const { return partly_free_whisker_steps_; }
   // Changes of command while free-running, and starts of free-running, that came within
   // kFreeResponseTime of the change before (the whiskers still rang): replayed as if settled.
   long long inexactFreeChanges() const { return inexact_free_changes_; }
@@ -295,12 +314,15 @@ class WhiskeredRobot final : public MobileBase {
     std::vector<BaseAngles> angles;  // step-major: angles[i * whiskers + w], i = 0 the first step
   };
 
-  void resetWhiskers();
+  // Puts the whiskers of `mask` straight at rest on the base (see place()); every whisker's
+  // contacts are forgotten when mask is all of them.
+  void resetWhiskers(std::uint32_t mask);
   void clearContacts();
+  // Enables or disables whisker w's ODE bodies, joints and capsule geoms.
+  void enableInOde(size_t w, bool on);
   BaseAngles odeBaseAngles(int w) const;
   // The response to from -> to, recorded on the probe robot the first time it is asked for.
   const FreeResponse& freeResponse(const Command& from, const Command& to);
-  void freeStep();
   void substep(double h);
   int substepsNeeded() const;
   void moveBase(double h);
@@ -339,8 +361,9 @@ class WhiskeredRobot final : public MobileBase {
   long long refused_steps_ = 0;
   long long refined_steps_ = 0;
   // Free-running (see the top of this file).
-  bool free_running_ = false;
+  std::uint32_t free_mask_ = 0;  // bit w: whisker w free-running
   long long free_steps_ = 0;
+  long long partly_free_whisker_steps_ = 0;
   long long inexact_free_changes_ = 0;
   Command command_;             // the last drive() command (zero after place() or a bad one)
   Command stepped_;             // the command the last step ran with

@@ -3,6 +3,7 @@
 // MAP_t (eq. 27); then fuse the collation into one map (fused_map.h).
 #pragma once
 
+#include <functional>
 #include <vector>
 
 #include "crunch/mapping/map.h"
@@ -11,6 +12,8 @@
 
 namespace crunch {
 
+class Mapper;  // mapper.h
+
 // Maps the world seen through `sensor` from `poses` (already filtered for reachability;
 // `skipped` says how many were dropped). Deterministic for a given seed: sensor noise and the
 // sampler draw from separate streams, so sampler settings do not change the sensed data.
@@ -18,5 +21,14 @@ namespace crunch {
 // An Error (nothing sensed) when options.validate() fails.
 Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
                const MappingOptions& options);
+
+// Called after each pose is mapped with the mapper (read-only) and the pose: a live view of the
+// run (`--serve`, serve/live_view.h). Mapper::snapshot() draws nothing, so an observer that
+// reads it leaves the map as it would be without one.
+using MapperObserver = std::function<void(const Mapper& mapper, const Pose2& pose)>;
+
+// runMapping with `observe` (may be empty) called after each pose, before options.progress.
+Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
+                       const MappingOptions& options, const MapperObserver& observe);
 
 }  // namespace crunch
