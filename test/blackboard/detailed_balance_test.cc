@@ -13,15 +13,33 @@
 // test (docs/BLACKBOARD.md, "Reversible-jump acceptance"). Not covered here: the parent change's
 // ratio log(w_old / W_rev) - log(w_new / W_fwd) (it is 0 unless a leg has two candidate tables,
 // which a model this small does not reach) and the table jitter (symmetric).
+//
+// (Rechecked 2026-11-25 on the full chains: the leg birth's ratio alone set to 0 fails the
+// leg-count test at 124 standard errors, P(1 leg) chain 0.957 vs 0.628; log q(T | L) dropped
+// from both the parent-table birth's and death's ratios fails the table test at 15, P(table)
+// 0.9995 vs 0.889. Dropped from the birth's ratio alone it is NOT caught: 0.928 vs 0.889, 3.5
+// standard errors.)
+//
+// Under AddressSanitizer (support/sanitizers.h) the leg-count test draws a quarter of the samples
+// (chain, burn-in and reference): 158 s of CPU under ASan at -O0, 109 s with the blackboard at
+// -O1 (the asan preset), 25 s with the quarter as well. It walks the same moves (~21,000 accepted
+// births and deaths, ~43,000 jitters) and asserts the same agreement at 4.5 standard errors,
+// which are about twice as wide: the leg birth's ratio set to 0 still fails it (60 standard
+// errors, checked on a Release build with the quarter), a 10 % error in that ratio does not (4.0
+// standard errors; the full chain: 6.3). The Release build in the same CI run keeps the full
+// samples and so that power; the sanitizers' run is for memory errors and undefined behaviour
+// along these moves. The table test runs in full everywhere (11 s under ASan at -O1).
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
 
 #include "crunch/blackboard/blackboard.h"
 #include "crunch/blackboard/sampler.h"
+#include "support/sanitizers.h"
 #include "test_builders.h"
 
 using namespace crunch;
+using crunch::testing::asanScaled;
 using crunch::testing::MakeShapelet;
 
 namespace {
@@ -151,7 +169,7 @@ TEST_CASE("Reversible jump: leg births, deaths and moves sample the number of le
   Reference r;
   r.z.push_back(1.0);
   r.var.push_back(0.0);
-  const int kSamples = 40000;
+  const int kSamples = asanScaled(40000, 4);
   for (int n = 1; n <= 5; ++n) {
     std::vector<double> w;
     w.reserve(kSamples);
@@ -183,9 +201,9 @@ TEST_CASE("Reversible jump: leg births, deaths and moves sample the number of le
   bb.pushShapelet(b);
   Rng chain_rng(17);
   Sampler sampler(bb, opt, chain_rng);
-  for (int i = 0; i < 2000; ++i) sampler.sweep(1.0);  // burn-in
+  for (int i = 0; i < asanScaled(2000, 4); ++i) sampler.sweep(1.0);  // burn-in
   Freq n[4];
-  for (int i = 0; i < 100000; ++i) {
+  for (int i = 0; i < asanScaled(100000, 4); ++i) {
     sampler.sweep(1.0);
     for (int k = 0; k < 4; ++k) n[k].x.push_back(bb.liveLegs() == k);
   }

@@ -8,18 +8,12 @@
 #include "crunch/signal/pipeline.h"
 #include "synthetic.h"
 #include "support/count_allocations.h"
+#include "support/sanitizers.h"
 
 
 // Eigen's dynamic matrices take their memory from malloc, not operator new, so malloc is
 // counted too (glibc: the executable's malloc interposes, __libc_malloc is the real one).
-// AddressSanitizer intercepts malloc itself; under it only operator new is counted.
-#if defined(__SANITIZE_ADDRESS__)
-#define CRUNCH_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define CRUNCH_ASAN 1
-#endif
-#endif
+// AddressSanitizer intercepts malloc itself; under it (CRUNCH_ASAN) only operator new is counted.
 #if defined(__GLIBC__) && !defined(CRUNCH_ASAN)
 extern "C" {
 void* __libc_malloc(std::size_t n);

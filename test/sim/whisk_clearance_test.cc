@@ -12,6 +12,7 @@
 #include "crunch/scene/scene.h"
 #include "crunch_sim/whisk_clearance.h"
 #include "crunch_sim/world.h"
+#include "support/sanitizers.h"
 
 using crunch::defaultWhiskerArray;
 using crunch::kPi;
@@ -116,11 +117,7 @@ TEST_CASE("WhiskClearance: agrees with a brute-force sweep on the default arena'
   const double margin = 0.01;
   // Under AddressSanitizer the brute force runs ~500 times slower (614 s for every pose): there
   // every 8th pose is checked, the same way; the Release build checks them all.
-#if defined(__SANITIZE_ADDRESS__)
-  constexpr std::size_t kStride = 8;
-#else
-  constexpr std::size_t kStride = 1;
-#endif
+  constexpr std::size_t kStride = crunch::testing::kUnderAsan ? 8 : 1;
   int clear = 0, near = 0, checked = 0;
   for (std::size_t k = 0; k < poses.size(); k += kStride) {
     const Pose2& pose = poses[k];
