@@ -45,11 +45,15 @@ json mapWithoutTime(const fs::path& path) {
   return m;
 }
 
-// /state.json once the server answers (within `limit`), else a null json.
+// The run's first published /state.json (seq >= 1; before it the server answers the empty
+// "starting" document, live_view.h) within `limit`, else a null json.
 json waitForState(httplib::Client& cli, std::chrono::seconds limit) {
   const auto t0 = Clock::now();
   while (Clock::now() - t0 < limit) {
-    if (auto res = cli.Get("/state.json"); res && res->status == 200) return json::parse(res->body);
+    if (auto res = cli.Get("/state.json"); res && res->status == 200) {
+      json state = json::parse(res->body);
+      if (state.value("seq", 0) >= 1) return state;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   return json();
