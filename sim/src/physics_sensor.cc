@@ -205,9 +205,26 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   // are not clear is approached along its heading, the whiskers bending on the way: the whisk
   // then starts pressed, as on the robot (ContactRamp handles both).
   const Pose2 from = approachStart(world_, mounts_, pose, options_.rig.robot.z);
-  robot.place(from);
+  const bool sliced = options_.skip_untouchable;
+  // Time slices (see the top of physics_sensor.h): the robot tracks the free response to every
+  // change of command, so that each whisker may leave ODE while it cannot touch anything and come
+  // back, in the state ODE would have given it, when it can.
+  robot.trackFreeResponses(sliced);
+  robot.place(from);  // straight and settled: every whisker may leave ODE exactly here
   const double approach = (pose.position() - from.position()).norm();
   if (approach > 0.0) {
+    // The approach: the whiskers that come within skip_margin of a wall or leg anywhere on the
+    // straight path stay in ODE, the others run free (exact from the settled state of place()).
+    std::uint32_t path_free = 0;
+    if (sliced) {
+      for (std::size_t w = 0; w < mounts_.size(); ++w) {
+        if (straightPathClear(world_, std::span(&mounts_[w], 1), from, approach,
+                              options_.skip_margin)) {
+          path_free |= 1u << w;
+        }
+      }
+    }
+    robot.setFreeWhiskers(path_free);
     (void)robot.drive(kApproachSpeed, 0.0);
     const long max_approach_steps =
         static_cast<long>(2.0 * approach / kApproachSpeed / options_.rig.robot.dt) + 1;
@@ -221,22 +238,54 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   wopt.whisker_bearings.clear();
   for (const WhiskerMount& m : mounts_) wopt.whisker_bearings.push_back(m.bearing);
   BodyWhisk whisk(robot, wopt);
-  // Untouchable whisks: the whole whisk and the wait after it without ODE (see the header).
+  // Per slice of the whisk's headings, the whiskers that come within skip_margin of a wall or leg
+  // somewhere in it, from where the robot stands now (an approach may stop short at a bump).
+  const Pose2 at = robot.odometry();
   const double checked = wopt.whisk_amplitude + kSkipHeadingSlack;  // each way from theta0
-  // Whisker by whisker: those that cannot touch anything leave ODE, the others stay. Only from
-  // settled whiskers (no approach drive just ended), where the replay is exact.
-  std::uint32_t free_mask = 0;
-  if (options_.skip_untouchable && approach == 0.0) {
-    for (std::size_t w = 0; w < mounts_.size(); ++w) {
-      if (inPlaceWhiskClear(world_, std::span(&mounts_[w], 1), pose, -checked, checked,
-                            options_.skip_margin)) {
-        free_mask |= 1u << w;
+  const int slices = static_cast<int>(std::ceil(2.0 * checked / kSliceWidth));
+  const double slice = 2.0 * checked / slices;
+  danger_.assign(static_cast<size_t>(slices), 0u);
+  std::uint32_t ever = 0;  // whiskers in danger somewhere in the whisk
+  if (sliced) {
+    for (int k = 0; k < slices; ++k) {
+      for (std::size_t w = 0; w < mounts_.size(); ++w) {
+        if (!inPlaceWhiskClear(world_, std::span(&mounts_[w], 1), at, -checked + k * slice,
+                               -checked + (k + 1) * slice, options_.skip_margin)) {
+          danger_[static_cast<size_t>(k)] |= 1u << w;
+        }
       }
+      ever |= danger_[static_cast<size_t>(k)];
     }
+    if (ever == 0) ++skipped_whisks_;
   }
-  if (free_mask == robot.allWhiskers()) ++skipped_whisks_;
-
-  robot.setFreeWhiskers(free_mask);
+  // The whiskers that must be in ODE for the next step at heading offset d: those in danger in
+  // its slice or either neighbour (a step turns 65 urad, a slice is 8.7 mrad); every whisker
+  // outside the checked range (never seen).
+  const auto needed = [&](double d) -> std::uint32_t {
+    if (!sliced || !(std::abs(d) <= checked)) return robot.allWhiskers();
+    const int k = std::clamp(static_cast<int>(std::floor((d + checked) / slice)), 0, slices - 1);
+    std::uint32_t m = danger_[static_cast<size_t>(k)];
+    if (k > 0) m |= danger_[static_cast<size_t>(k - 1)];
+    if (k + 1 < slices) m |= danger_[static_cast<size_t>(k + 1)];
+    return m;
+  };
+  // Out of ODE: a whisker not needed there that is free-running, or in ODE but back on its free
+  // trajectory (WhiskeredRobot::onFreeTrajectory: it touched, was released and has stopped
+  // ringing, or it rang from an approach). Back into ODE: a free whisker that is needed.
+  const auto slice_step = [&] {
+    const std::uint32_t need = needed(robot.odometry().theta - at.theta);
+    std::uint32_t free = robot.freeWhiskers() & ~need;
+    for (int w = 0; w < robot.whiskerCount(); ++w) {
+      const std::uint32_t bit = 1u << w;
+      if (!(need & bit) && !(free & bit) && robot.onFreeTrajectory(w)) free |= bit;
+    }
+    robot.setFreeWhiskers(free);
+  };
+  if (sliced) {
+    // Settled straight since place() unless an approach drove: then slice_step() decides.
+    if (approach == 0.0) robot.setFreeWhiskers(robot.allWhiskers() & ~needed(0.0));
+    slice_step();
+  }
   // As the robot's control loop marks it: the whisk's episodes are the ones reported.
   chain.beginWhisk();
   (void)whisk.startInPlace(+1);  // the ray model's sweep: toward +A first
@@ -251,9 +300,6 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   for (long n = 0; n < max_steps; ++n) {
     const std::uint32_t before = chain.reportedMask();
     if (rig_->step() != nullptr) score(chain.reportedMask() & ~before);
-    if (robot.freeWhiskers() != 0 && std::abs(robot.odometry().theta - pose.theta) > checked) {
-      robot.setFreeRunning(false);  // outside what was checked: ODE again (never seen)
-    }
     if (whisking) {
       (void)whisk.update(rig_->contactMask());
       if (whisk.done()) {
@@ -263,6 +309,7 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
     } else if (!rig_->pipeline().inEpisode() || robot.now() >= settle_until) {
       break;
     }
+    if (sliced) slice_step();
   }
   (void)robot.stop();
   robot.setFreeRunning(false);

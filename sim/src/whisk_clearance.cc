@@ -48,4 +48,24 @@ bool inPlaceWhiskClear(const World& world, std::span<const WhiskerMount> mounts,
   return true;
 }
 
+bool straightPathClear(const World& world, std::span<const WhiskerMount> mounts, const Pose2& from,
+                       double distance, double margin) {
+  if (!(std::isfinite(from.x) && std::isfinite(from.y) && std::isfinite(from.theta) &&
+        std::isfinite(distance) && std::isfinite(margin)) ||
+      !(margin > 0.0) || distance < 0.0) {
+    return false;
+  }
+  const int intervals = std::max(1, static_cast<int>(std::ceil(distance / (0.5 * margin))));
+  const double step = distance / intervals;
+  const double needed = margin + 0.5 * step;
+  const Vec2 along{std::cos(from.theta), std::sin(from.theta)};
+  for (int k = 0; k <= intervals; ++k) {
+    const Vec2 at = from.position() + (k * step) * along;
+    if (!inPlaceWhiskClear(world, mounts, Pose2{at.x(), at.y(), from.theta}, 0.0, 0.0, needed)) {
+      return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace crunch::sim

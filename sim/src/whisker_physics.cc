@@ -504,31 +504,118 @@ void WhiskeredRobot::setFreeWhiskers(std::uint32_t mask) {
   if (mask == free_mask_) return;
   const std::uint32_t freed = mask & ~free_mask_, back = free_mask_ & ~mask;
   if (freed != 0) {
+    // Exact when the whiskers have settled (since_change_ saturated) or each freed one is on the
+    // tracked free trajectory; else a ringing whisker joins the replay mid-swing (counted).
+    bool exact = since_change_ >= response_steps_;
+    for (size_t w = 0; w < whiskers_.size() && !exact; ++w) {
+      if (freed & (1u << w)) exact = onFreeTrajectory(static_cast<int>(w));
+    }
+    if (!exact) ++inexact_free_changes_;
     if (mask == allWhiskers()) clearContacts();
-    // Hold the angles ODE has now: the settled value of the current command if the whiskers have
-    // settled (since_change_ saturated), else a ringing whisker frozen mid-swing (counted). A
-    // whisker freed while others replay a change joins the replay (counted unless settled).
+    // Hold the angles ODE has now until the next step replays the tracked response (if any).
     for (size_t w = 0; w < whiskers_.size(); ++w) {
       if (!(freed & (1u << w))) continue;
       free_angles_[w] = odeBaseAngles(static_cast<int>(w));
       enableInOde(w, false);
     }
-    if (free_mask_ == 0) replay_ = nullptr;
-    if (since_change_ < response_steps_) ++inexact_free_changes_;
+    if (free_mask_ == 0 && !track_free_) replay_ = nullptr;
   }
   free_mask_ = mask;
   if (back != 0) {
     for (size_t w = 0; w < whiskers_.size(); ++w) {
       if (back & (1u << w)) enableInOde(w, true);
     }
+    // Straight on the base (which also re-attaches the joints at their rest configuration), then,
+    // where a free response with states is tracked, in its state: as if it had been in ODE.
     resetWhiskers(back);
+    for (size_t w = 0; w < whiskers_.size(); ++w) {
+      const double* state = (back & (1u << w)) ? freeState(w) : nullptr;
+      if (state == nullptr) continue;
+      for (size_t c = 0; c < whiskers_[w].bodies.size(); ++c) setBodyState(w, c, state + c * kBodyState);
+    }
   }
+}
+
+void WhiskeredRobot::bodyState(size_t w, size_t c, double* out) const {
+  dBodyID b = whiskers_[w].bodies[c].get();
+  const double co = std::cos(pose_.theta), si = std::sin(pose_.theta);
+  const auto rotate = [&](const dReal* v, double* o) {  // by -theta about z
+    o[0] = co * v[0] + si * v[1];
+    o[1] = -si * v[0] + co * v[1];
+    o[2] = v[2];
+  };
+  const dReal* p = dBodyGetPosition(b);
+  const dReal rel[3] = {p[0] - pose_.x, p[1] - pose_.y, p[2]};
+  rotate(rel, out);
+  const dReal* q = dBodyGetQuaternion(b);
+  const dQuaternion base_inv = {std::cos(0.5 * pose_.theta), 0.0, 0.0, -std::sin(0.5 * pose_.theta)};
+  dQuaternion qr;
+  dQMultiply0(qr, base_inv, q);
+  std::copy(qr, qr + 4, out + 3);
+  rotate(dBodyGetLinearVel(b), out + 7);
+  rotate(dBodyGetAngularVel(b), out + 10);
+}
+
+void WhiskeredRobot::setBodyState(size_t w, size_t c, const double* in) {
+  dBodyID b = whiskers_[w].bodies[c].get();
+  const double co = std::cos(pose_.theta), si = std::sin(pose_.theta);
+  const auto rotate = [&](const double* v, double* o) {  // by +theta about z
+    o[0] = co * v[0] - si * v[1];
+    o[1] = si * v[0] + co * v[1];
+    o[2] = v[2];
+  };
+  double v[3];
+  rotate(in, v);
+  dBodySetPosition(b, v[0] + pose_.x, v[1] + pose_.y, v[2]);
+  const dQuaternion base = {std::cos(0.5 * pose_.theta), 0.0, 0.0, std::sin(0.5 * pose_.theta)};
+  const dQuaternion rel = {in[3], in[4], in[5], in[6]};
+  dQuaternion q;
+  dQMultiply0(q, base, rel);
+  dBodySetQuaternion(b, q);
+  rotate(in + 7, v);
+  dBodySetLinearVel(b, v[0], v[1], v[2]);
+  rotate(in + 10, v);
+  dBodySetAngularVel(b, v[0], v[1], v[2]);
+}
+
+const double* WhiskeredRobot::freeState(size_t w) const {
+  if (replay_ == nullptr || replay_->states.empty()) return nullptr;
+  const long i = std::clamp(since_change_, 1L, response_steps_) - 1;  // after the last step
+  const size_t capsules = whiskers_[w].bodies.size();
+  return &replay_->states[((static_cast<size_t>(i) * mounts_.size() + w) * capsules) * kBodyState];
+}
+
+bool WhiskeredRobot::onFreeTrajectory(int w) const {
+  assert(w >= 0 && w < whiskerCount());
+  const auto wi = static_cast<size_t>(w);
+  if ((free_mask_ & (1u << wi)) || contact_count_[wi] != 0) return false;
+  const double* free = freeState(wi);
+  if (free == nullptr) return false;
+  const double tol = kFreeTrajectoryTolerance;
+  for (size_t c = 0; c < whiskers_[wi].bodies.size(); ++c, free += kBodyState) {
+    double s[kBodyState];
+    bodyState(wi, c, s);
+    const double len = seg_len_[c], dt = options_.dt;
+    double dq = 0.0, dq_flipped = 0.0;  // q and -q are the same orientation
+    for (int k = 3; k < 7; ++k) {
+      dq = std::max(dq, std::abs(s[k] - free[k]));
+      dq_flipped = std::max(dq_flipped, std::abs(s[k] + free[k]));
+    }
+    if (std::min(dq, dq_flipped) * len > tol) return false;
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(s[k] - free[k]) > tol || std::abs(s[7 + k] - free[7 + k]) * dt > tol ||
+          std::abs(s[10 + k] - free[10 + k]) * len * dt > tol) {
+        return false;
+      }
+    }
+  }
+  return true;
 }
 
 const WhiskeredRobot::FreeResponse& WhiskeredRobot::freeResponse(const Command& from,
                                                                  const Command& to) {
   for (const FreeResponse& r : free_responses_) {
-    if (r.from == from && r.to == to) return r;
+    if (r.from == from && r.to == to && (!track_free_ || !r.states.empty())) return r;
   }
   if (!probe_) {
     // An empty arena large enough for the probe to drive two response times at full speed.
@@ -552,10 +639,21 @@ const WhiskeredRobot::FreeResponse& WhiskeredRobot::freeResponse(const Command& 
   r.from = from;
   r.to = to;
   r.angles.reserve(static_cast<size_t>(response_steps_) * mounts_.size());
+  const size_t capsules = static_cast<size_t>(segmentCount());
+  if (track_free_) {
+    r.states.resize(static_cast<size_t>(response_steps_) * mounts_.size() * capsules * kBodyState);
+  }
   (void)probe.drive(to.v, to.omega);
+  double* state = r.states.data();
   for (long i = 0; i < response_steps_; ++i) {
     probe.step();
-    for (int w = 0; w < whiskerCount(); ++w) r.angles.push_back(probe.baseAngles(w));
+    for (int w = 0; w < whiskerCount(); ++w) {
+      r.angles.push_back(probe.baseAngles(w));
+      if (!track_free_) continue;
+      for (size_t c = 0; c < capsules; ++c, state += kBodyState) {
+        probe.bodyState(static_cast<size_t>(w), c, state);
+      }
+    }
   }
   probe_settled_ = to;
   free_responses_.push_back(std::move(r));
@@ -565,9 +663,19 @@ const WhiskeredRobot::FreeResponse& WhiskeredRobot::freeResponse(const Command& 
 void WhiskeredRobot::step() {
   const bool changed = !(command_ == stepped_);
   if (changed) {
-    if (free_mask_ != 0) {
-      if (since_change_ < response_steps_) ++inexact_free_changes_;
+    // A command change before the free response has settled: the new response (recorded from
+    // the settled previous command) does not describe the free whiskers. When tracking, they go
+    // back to ODE in the state the tracked response gives them after the last step, exactly as if
+    // they had been there all along, and may leave again once back on the new free trajectory.
+    if (track_free_ && free_mask_ != 0 && since_change_ < response_steps_ && replay_ != nullptr &&
+        !replay_->states.empty()) {
+      setFreeWhiskers(0);
+    }
+    if (free_mask_ != 0 || track_free_) {
+      if (free_mask_ != 0 && since_change_ < response_steps_) ++inexact_free_changes_;
       replay_ = &freeResponse(stepped_, command_);
+    } else {
+      replay_ = nullptr;
     }
     since_change_ = 0;
   }
@@ -585,6 +693,7 @@ void WhiskeredRobot::step() {
     const double h = options_.dt / n;
     for (int i = 0; i < n; ++i) substep(h);
     partly_free_whisker_steps_ += std::popcount(free_mask_);
+    ode_whisker_steps_ += static_cast<long long>(whiskers_.size()) - std::popcount(free_mask_);
   }
   if (free_mask_ != 0 && replay_ != nullptr) {
     const long i = std::min(since_change_, response_steps_ - 1);  // then hold the settled value

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -23,6 +24,7 @@ using crunch::TableSpec;
 using crunch::Vec2;
 using crunch::WhiskerMount;
 using crunch::sim::inPlaceWhiskClear;
+using crunch::sim::straightPathClear;
 using crunch::sim::World;
 
 namespace {
@@ -152,4 +154,45 @@ TEST_CASE("WhiskClearance: bad arguments are never clear", "[sim][skip]") {
   CHECK_FALSE(inPlaceWhiskClear(*world, bad, pose, -kA, kA, 0.01));
   // No whiskers: nothing can touch.
   CHECK(inPlaceWhiskClear(*world, std::vector<WhiskerMount>{}, pose, -kA, kA, 0.01));
+}
+
+TEST_CASE("WhiskClearance: a straight approach is clear exactly when the tips stay farther than "
+          "the margin",
+          "[sim][skip]") {
+  // Driving toward the +x wall (x = 3) from x0 for `distance`: the foremost tip (the inner
+  // whiskers', at +-11.25 degrees) ends 3 - x0 - distance - ahead from it, and nothing comes
+  // closer on the way.
+  const auto world = World::build(arena(3.0, 3.0));
+  const auto mounts = defaultWhiskerArray();
+  const auto tip_x = [](const WhiskerMount& m) {
+    return (m.base + m.length * Vec2(std::cos(m.bearing), std::sin(m.bearing))).x();
+  };
+  double ahead = 0.0;
+  for (const WhiskerMount& m : mounts) ahead = std::max(ahead, tip_x(m));
+  const double margin = 0.01;
+  const double x0 = 1.5;
+  for (const double d : {-0.003, 0.002, 0.0099, 0.0126, 0.013, 0.05}) {
+    const double distance = 3.0 - x0 - ahead - d;
+    INFO("closest approach " << d << " m after " << distance << " m");
+    REQUIRE(sweptDistance(*world, mounts, {x0 + distance, 1.5, 0.0}, 0.0, 0.0, 1) ==
+            Approx(std::max(d, 0.0)).margin(1e-6));
+    const bool clear = straightPathClear(*world, mounts, {x0, 1.5, 0.0}, distance, margin);
+    if (d <= margin) CHECK_FALSE(clear);
+    if (d > 1.25 * margin) CHECK(clear);
+    // Each whisker alone: the outer ones (bearing +-33.75 deg) end farther from the wall.
+    for (const WhiskerMount& m : mounts) {
+      const double gap = 3.0 - (x0 + distance + tip_x(m));
+      const bool one = straightPathClear(*world, std::span(&m, 1), {x0, 1.5, 0.0}, distance, margin);
+      if (gap <= margin) CHECK_FALSE(one);
+      if (gap > 1.25 * margin) CHECK(one);
+    }
+  }
+  // Driving away from the wall is clear; a zero-length path is the pose itself.
+  CHECK(straightPathClear(*world, mounts, {1.5, 1.5, kPi}, 1.0, margin));
+  CHECK_FALSE(straightPathClear(*world, mounts, {3.0 - ahead, 1.5, 0.0}, 0.0, margin));
+  // Bad arguments are never clear.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CHECK_FALSE(straightPathClear(*world, mounts, {1.5, 1.5, 0.0}, -0.1, margin));
+  CHECK_FALSE(straightPathClear(*world, mounts, {1.5, 1.5, 0.0}, nan, margin));
+  CHECK_FALSE(straightPathClear(*world, mounts, {1.5, 1.5, 0.0}, 0.1, 0.0));
 }

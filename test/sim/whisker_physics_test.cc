@@ -3,6 +3,8 @@
 #include <ode/ode.h>
 
 #include <algorithm>
+#include <bit>
+#include <iostream>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
@@ -414,6 +416,64 @@ TEST_CASE("WhiskeredRobot: free-running counts what its replay cannot model", "[
   robot->run(2.0);
   robot->setFreeRunning(true);  // settled
   CHECK(robot->inexactFreeChanges() == 2);
+}
+
+TEST_CASE("WhiskeredRobot: tracking the free response, whiskers leave ODE and come back as if "
+          "they had stayed",
+          "[sim][skip]") {
+  // Commands that change sooner than the free response settles (0.3-1 s apart, against
+  // kFreeResponseTime's 1.8 s): an all-ODE robot against one that tracks its free responses,
+  // frees each whisker whenever it is back on its free trajectory and sends them all back to ODE
+  // every 0.25 s (setFreeWhiskers(0): in their tracked state). The tracked robot's whiskers must
+  // read what ODE's read at every step, nothing may be counted inexact (a change before the
+  // response settled sends the free whiskers back to ODE first), and whiskers must really have
+  // left ODE.
+  const auto world = World::build(emptyArena());
+  auto ode = makeRobot(*world);
+  auto tracked = makeRobot(*world);
+  const Pose2 start{2.0, 2.0, 0.4};
+  ode->place(start);
+  tracked->place(start);
+  tracked->trackFreeResponses(true);
+  tracked->setFreeRunning(true);  // straight and settled after place(): exact
+  const double rate = kPi / 24.0;
+  const double legs[][3] = {{0.0, rate, 0.4}, {0.0, -rate, 1.0}, {0.05, 0.0, 0.3},
+                            {0.0, 0.0, 2.5},  {0.0, rate, 2.5},  {0.0, -rate, 0.6}};
+  double max_diff = 0.0;
+  long long left = 0, returned = 0, steps = 0;
+  for (const auto& leg : legs) {
+    REQUIRE(ode->drive(leg[0], leg[1]).ok());
+    REQUIRE(tracked->drive(leg[0], leg[1]).ok());
+    const int n = static_cast<int>(std::lround(leg[2] / ode->options().dt));
+    for (int i = 0; i < n; ++i, ++steps) {
+      const bool was_free = tracked->freeWhiskers() != 0;
+      ode->step();
+      tracked->step();
+      if (was_free && tracked->freeWhiskers() == 0) ++returned;  // a change came too soon
+      if (steps % 500 == 499) tracked->setFreeWhiskers(0);
+      std::uint32_t free = tracked->freeWhiskers();
+      for (int w = 0; w < tracked->whiskerCount(); ++w) {
+        if (tracked->onFreeTrajectory(w)) free |= 1u << w;
+      }
+      left += std::popcount(free & ~tracked->freeWhiskers());
+      tracked->setFreeWhiskers(free);
+      for (int w = 0; w < tracked->whiskerCount(); ++w) {
+        const BaseAngles a = ode->baseAngles(w), b = tracked->baseAngles(w);
+        max_diff = std::max({max_diff, std::abs(a.horizontal - b.horizontal),
+                             std::abs(a.vertical - b.vertical)});
+      }
+    }
+  }
+  INFO("largest difference " << max_diff << " rad; " << left << " whiskers left ODE, "
+                             << returned << " changes sent the free ones back");
+  CHECK(max_diff < 5e-10);  // measured 8.7e-11 rad (kFreeTrajectoryTolerance); a Hall code is 1e-4
+  CHECK(tracked->inexactFreeChanges() == 0);
+  CHECK(left > 20);
+  CHECK(returned >= 3);  // the changes at 0.4, 1.4 and 1.7 s came before the response settled
+  CHECK(tracked->odeWhiskerSteps() < ode->odeWhiskerSteps() / 2);
+  std::cout << "tracked free responses: largest difference " << max_diff << " rad, "
+            << tracked->odeWhiskerSteps() << " of " << ode->odeWhiskerSteps()
+            << " whisker-steps in ODE\n";
 }
 
 TEST_CASE("WhiskeredRobot: leaving free-running mid-turn, the whiskers turn with the base",

@@ -41,4 +41,14 @@ namespace crunch::sim {
 bool inPlaceWhiskClear(const World& world, std::span<const WhiskerMount> mounts, const Pose2& pose,
                        double from, double to, double margin);
 
+// True if no straight whisker of `mounts` comes within `margin` (metres, > 0) of any wall or leg
+// while the robot drives straight from `from` along its heading for `distance` metres (>= 0),
+// the heading fixed: the approach the physics sensor makes to a pose near a wall or leg. Every
+// whisker point moves by the same vector, so positions `step` apart along the path leave each
+// point within step / 2 of a sampled one; step is margin / 2 and the sampled distances must
+// exceed margin + step / 2 (conservative as above). False for a non-finite argument, margin <= 0
+// or distance < 0.
+bool straightPathClear(const World& world, std::span<const WhiskerMount> mounts, const Pose2& from,
+                       double distance, double margin);
+
 }  // namespace crunch::sim

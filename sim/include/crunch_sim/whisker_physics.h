@@ -65,6 +65,13 @@
 //     the one before (so with max_wheel_acceleration, only if a ramp and its ringing end within
 //     that time); other cases replay all the same and are counted (inexactFreeChanges()).
 //     segmentEnds() give the straight whisker (the ringing moves the tip by <= 1.4 mm).
+//   - Time slices (trackFreeResponses, docs/WHISKERS.md "Time slices"): the free responses then
+//     also hold every capsule's full state, so a whisker may leave ODE and come back at any step:
+//     it comes back in the state ODE would have given it, and leaves again only once it is on
+//     its free trajectory (onFreeTrajectory: after a release, when its own ringing has died out).
+//     A change of command before the response settled sends the free whiskers back to ODE, so
+//     nothing is replayed inexactly. PhysicsSensorModel keeps each whisker in ODE only in the
+//     slices of a whisk in which it can touch something.
 //
 // Ownership: the robot owns every ODE handle it creates (unique_ptr with deleters) and holds a
 // reference to the World, which must outlive it. Non-copyable.
@@ -74,7 +81,8 @@
 // (the contact buffer is sized at construction, ODE reuses its contact-joint arena and step
 // memory once they have grown to the largest contact set seen), except that a free-running
 // step() at a change of command not seen before records its free response (the probe robot,
-// once, and about 230 kB per change with four whiskers).
+// once, and about 230 kB per change with four whiskers; with trackFreeResponses the states too,
+// about 6 MB per change).
 #pragma once
 
 #include <Eigen/Core>
@@ -200,6 +208,33 @@ class WhiskeredRobot final : public MobileBase {
   // it. setFreeRunning(on) is setFreeWhiskers(all or none). Bits beyond the whiskers are ignored.
   void setFreeWhiskers(std::uint32_t mask);
   std::uint32_t freeWhiskers() const { return free_mask_; }
+  // Tracking the free trajectory (time-sliced ODE, docs/WHISKERS.md "Time slices"): while on,
+  // every change of command looks up (recording it the first time, as above) the free response,
+  // even when no whisker is free-running, so that a whisker may leave ODE and come back at any
+  // step. Each recorded step then holds every capsule's full state (position, orientation,
+  // linear and angular velocity) relative to the base, besides the base angles; a whisker that
+  // comes back to ODE is put in that state at the current pose rather than straight, so it goes
+  // on as if it had been in ODE all along (to the replay's 2e-13 rad), and onFreeTrajectory()
+  // tells when a whisker in ODE is back on that path and may leave again. A command that changes
+  // before the tracked response has settled (kFreeResponseTime) sends the free whiskers back to
+  // ODE in their tracked state first, since the new response is recorded from the settled
+  // previous command and would not describe them: with tracking on, a free whisker is never
+  // replayed inexactly. Off by default (the roaming robot changes command too often for
+  // recording to pay).
+  void trackFreeResponses(bool on) { track_free_ = on; }
+  // True when whisker w, in ODE, touches nothing and every capsule's state is within
+  // kFreeTrajectoryTolerance of the free response being tracked: freeing it then replays what
+  // ODE would have computed. False while it is free-running, or when no free response with
+  // states is tracked (tracking off, or no change of command since place()).
+  bool onFreeTrajectory(int w) const;
+  // How close a whisker in ODE must be to its free trajectory to leave ODE: capsule positions
+  // (metres) and orientations (quaternion components, times the capsule length) within 1e-12 m,
+  // velocities within 1e-12 m over a step (linear: 2e-9 m/s; angular times the capsule length).
+  // The base angle it reads then stays within ~1e-10 rad of ODE's (measured 8.7e-11 rad through
+  // commands changing every 0.3-2.5 s: 1e-6 of a Hall code); at 1e-10 m it was 7.3e-9 rad. A
+  // released whisker's ringing falls 70- to 90-fold every 0.25 s, so each factor of 100 here
+  // keeps it in ODE about 0.25 s longer.
+  static constexpr double kFreeTrajectoryTolerance = 1e-12;
   // Every whisker's bit.
   std::uint32_t allWhiskers() const {
     return whiskers_.size() >= 32 ? ~0u : (1u << whiskers_.size()) - 1u;
@@ -208,6 +243,8 @@ class WhiskeredRobot final : public MobileBase {
   long long freeSteps() const { return free_steps_; }
   // Whisker-steps taken free-running while another whisker ran in ODE.
   long long partlyFreeWhiskerSteps() const { return partly_free_whisker_steps_; }
+  // Whisker-steps taken in ODE (each step counts the whiskers it simulated there).
+  long long odeWhiskerSteps() const { return ode_whisker_steps_; }
   // Changes of command while free-running, and starts of free-running, that came within
   // kFreeResponseTime of the change before (the whiskers still rang): replayed as if settled.
   long long inexactFreeChanges() const { return inexact_free_changes_; }
@@ -312,7 +349,18 @@ class WhiskeredRobot final : public MobileBase {
   struct FreeResponse {
     Command from, to;
     std::vector<BaseAngles> angles;  // step-major: angles[i * whiskers + w], i = 0 the first step
+    // With trackFreeResponses on: step-major states[((i * whiskers + w) * capsules + c) *
+    // kBodyState + k], each capsule's position, quaternion, linear and angular velocity in the
+    // base's frame after step i (bodyState()). Empty otherwise.
+    std::vector<double> states;
   };
+  static constexpr int kBodyState = 13;
+  // Capsule c of whisker w's state in the frame of the base at pose_ (3 position, 4 quaternion,
+  // 3 linear and 3 angular velocity), and back.
+  void bodyState(size_t w, size_t c, double* out) const;
+  void setBodyState(size_t w, size_t c, const double* in);
+  // The tracked free state of whisker w after the last step, or null (no free response tracked).
+  const double* freeState(size_t w) const;
 
   // Puts the whiskers of `mask` straight at rest on the base (see place()); every whisker's
   // contacts are forgotten when mask is all of them.
@@ -364,6 +412,7 @@ class WhiskeredRobot final : public MobileBase {
   std::uint32_t free_mask_ = 0;  // bit w: whisker w free-running
   long long free_steps_ = 0;
   long long partly_free_whisker_steps_ = 0;
+  long long ode_whisker_steps_ = 0;
   long long inexact_free_changes_ = 0;
   Command command_;             // the last drive() command (zero after place() or a bad one)
   Command stepped_;             // the command the last step ran with
@@ -371,6 +420,7 @@ class WhiskeredRobot final : public MobileBase {
   long response_steps_ = 0;     // kFreeResponseTime in steps
   std::deque<FreeResponse> free_responses_;  // a deque: replay_ stays valid as it grows
   const FreeResponse* replay_ = nullptr;  // being replayed, or null: hold free_angles_
+  bool track_free_ = false;               // trackFreeResponses()
   std::vector<BaseAngles> free_angles_;   // per whisker: baseAngles() while free-running
   // The probe: this robot's twin in an empty world, where free responses are recorded. Declared
   // world first, so that the robot goes first.
