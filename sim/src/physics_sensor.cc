@@ -319,6 +319,9 @@ void PhysicsSensorModel::sense(const Pose2& pose, Rng& /*rng*/,
   }
   rig_->resetTruth();
   errors_.simulated_s += robot.now() - t0;
+  errors_.ode_whisker_steps = robot.odeWhiskerSteps();
+  errors_.whisker_steps = robot.odeWhiskerSteps() + robot.partlyFreeWhiskerSteps() +
+                          robot.freeSteps() * robot.whiskerCount();
 
   const std::size_t first = out.size();
   chain.endWhisk(out, free_);

@@ -39,6 +39,8 @@ nlohmann::ordered_json physicsJson(const PhysicsSummary& physics) {
           {"touches_without_orientation", e.no_orientation},
           {"touches_without_ramp", e.no_ramp},
           {"simulated_s", e.simulated_s},
+          {"whisker_steps", e.whisker_steps},
+          {"whisker_steps_in_ode", e.ode_whisker_steps},
           {"gaussian_same_scene",
            {{"noise", "realistic"},
             {"accuracy", accuracyJson(physics.gaussian)},

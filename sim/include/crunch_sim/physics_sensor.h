@@ -110,6 +110,9 @@ struct ReportErrors {
   int no_orientation = 0;      // touched whiskers whose episode had no orientation
   int no_ramp = 0;             // touched whiskers whose contact had no ramp to locate it
   double simulated_s = 0.0;    // simulated time spent sensing
+  // Whisker-steps simulated, and those of them in ODE (the rest replayed their free response:
+  // skipped whisks and time slices).
+  long long whisker_steps = 0, ode_whisker_steps = 0;
 
   double meanR() const { return reports ? sum_r / reports : 0.0; }
   double sigmaR() const;       // root mean square error, metres
