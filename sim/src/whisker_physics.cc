@@ -327,7 +327,7 @@ void WhiskeredRobot::place(const Pose2& pose) {
   pose_ = pose;
   wheels_.halt();
   resetWhiskers(allWhiskers());
-  bumped_ = world_.bodyCollides(pose_);
+  bumped_ = frontBumperPressed(pose_);
   // Straight at rest with the wheels stopped: the settled state of the zero command.
   command_ = stepped_ = Command{};
   since_change_ = response_steps_;
@@ -354,20 +354,29 @@ void WhiskeredRobot::moveBase(double h) {
   const double omega = wheels_.omega();
   double v = wheels_.v();
   Pose2 next = integrateArc(pose_, v, omega, h);
-  if (v != 0.0) {
-    const bool hit = world_.bodyCollides(next);
-    if (hit && clearance(next) < clearance(pose_) - 1e-12) {
-      // The bumper rule: no translation deeper into an obstacle; turning in place is allowed.
-      v = 0.0;
-      next = integrateArc(pose_, 0.0, omega, h);
-      ++refused_steps_;
-      bumped_ = true;
-    } else {
-      bumped_ = hit;
-    }
+  // The bumper feels where the wheels would take the body, whether or not they can.
+  bool pressed = frontBumperPressed(next);
+  if (v != 0.0 && world_.bodyCollides(next) && clearance(next) < clearance(pose_) - 1e-12) {
+    // No translation deeper into an obstacle (the wheels stall), ahead or behind; turning in
+    // place is allowed (a round body cannot turn deeper).
+    v = 0.0;
+    next = integrateArc(pose_, 0.0, omega, h);
+    ++refused_steps_;
   }
   setBaseBodies(v, omega, h);
   pose_ = next;
+  bumped_ = pressed || frontBumperPressed(pose_);
+}
+
+bool WhiskeredRobot::frontBumperPressed(const Pose2& p) const {
+  const Vec2 centre = p.position();
+  const Vec2 ahead{std::cos(p.theta), std::sin(p.theta)};
+  for (const OrientedRect& r : world_.footprints()) {
+    if ((r.pose.position() - centre).norm() - r.circumradius() > kRobotRadius + kBumperReach) continue;
+    const PerimeterPoint q = closestOnPerimeter(r, centre);
+    if (q.distance <= kRobotRadius + kBumperReach && (q.point - centre).dot(ahead) > 0.0) return true;
+  }
+  return false;
 }
 
 void WhiskeredRobot::setBaseBodies(double v, double omega, double h) {

@@ -537,6 +537,45 @@ TEST_CASE("WhiskeredRobot: the bumper stops the base at a wall and lets it back 
   checkHealthy(h);
 }
 
+TEST_CASE("WhiskeredRobot: backing into a leg stalls the wheels but presses no bumper",
+          "[sim]") {
+  // The Create's bumper covers the front half of the body. A robot that reverses into a leg
+  // (as the roaming whisk's clear phase did in the 1 h soak, then backed off "from the bump"
+  // into the same leg for five minutes) stops against it without a bump, turns in place and
+  // drives away; a leg ahead presses the bumper while the body touches it.
+  Scene s = emptyArena();
+  s.tables.push_back(table(2.0, 2.0, 0.0));  // legs at (2 +- 0.375, 2 +- 0.225)
+  const auto world = World::build(s);
+  auto robot = makeRobot(*world);
+  // Facing +x with the leg at (1.625, 1.775) 0.1 m behind the body's rim.
+  const Pose2 start{1.625 + 0.025 + kRobotRadius + 0.1, 1.775, 0.0};
+  robot->place(start);
+  REQUIRE_FALSE(robot->bumped());
+  Health h;
+  driveFor(*robot, -0.2, 0.0, 1.0, h);  // would go 0.2 m back
+  CHECK(robot->refusedSteps() > 100);
+  CHECK(robot->odometry().x < start.x - 0.099);
+  CHECK_FALSE(robot->bumped());
+  // A turn in place keeps the rear contact and presses nothing; then forward, away from it.
+  driveFor(*robot, 0.0, 0.5, 1.0, h);
+  CHECK(robot->odometry().theta == Approx(0.5));
+  CHECK_FALSE(robot->bumped());
+  const Pose2 before = robot->odometry();
+  driveFor(*robot, 0.2, 0.0, 0.5, h);
+  CHECK((robot->odometry().position() - before.position()).norm() == Approx(0.1).margin(1e-3));
+  CHECK_FALSE(robot->bumped());
+  // Turned to face the leg, the bumper is pressed while the body touches it.
+  robot->place({1.625 + 0.025 + kRobotRadius + 0.05, 1.775, kPi});
+  REQUIRE_FALSE(robot->bumped());
+  driveFor(*robot, 0.2, 0.0, 0.5, h);
+  CHECK(robot->bumped());
+  driveFor(*robot, 0.0, 0.0, 0.1, h);
+  CHECK(robot->bumped());  // stopped against it
+  driveFor(*robot, -0.2, 0.0, 0.2, h);
+  CHECK_FALSE(robot->bumped());
+  checkHealthy(h);
+}
+
 TEST_CASE("WhiskeredRobot: contact() gives the touching point, normal and radial distance",
           "[sim]") {
   const auto world = World::build(emptyArena());

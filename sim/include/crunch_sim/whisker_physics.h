@@ -28,8 +28,13 @@
 //     end pose would collide and sit deeper in an obstacle than its start pose (a smaller signed
 //     clearance to the nearest wall or leg footprint) is refused: the base keeps its position
 //     for that substep, still turning in place if commanded (a round body cannot turn deeper),
-//     until a command backs it out. bumped() is true from a refused move (the bumper pressed
-//     against the obstacle) or a colliding pose, until a move that ends clear of everything.
+//     until a command backs it out. bumped() is the Create's bumper, which covers the front
+//     half of the body: true while a wall or leg touches the body ahead of the wheel axle
+//     (within kRobotRadius + kBumperReach of the centre), at the pose or where the step's
+//     command would have taken it, updated every substep (turning in place too). A contact
+//     behind the axle stalls the wheels but presses no bumper, as on the Create: a robot that
+//     backs into a leg is not told "bumped" and so does not try to back off further into it
+//     (the 1 h soak of 2026-11-28 found that loop: docs/HARDENING.md).
 //   - Each whisker is a chain of rigid capsules joined by two-axis spring-damper joints (ODE
 //     universal joints): axis 1 vertical (in-plane, "horizontal" bending), axis 2 horizontal
 //     across the shaft (vertical bending). The shaft is cut into Options::elements beam elements
@@ -379,6 +384,11 @@ class WhiskeredRobot final : public MobileBase {
   static void nearCallback(void* data, dxGeom* o1, dxGeom* o2);
   void onNear(dxGeom* o1, dxGeom* o2);
   double clearance(const Pose2& p) const;
+  // The front bumper at pose p (see the top of this file).
+  bool frontBumperPressed(const Pose2& p) const;
+  // How far beyond the body's rim the bumper still feels a wall or leg, metres: the body stops
+  // within one substep's travel (0.5 m/s x 0.5 ms = 0.25 mm) of touching.
+  static constexpr double kBumperReach = 0.0005;
 
   // Declaration order is destruction order reversed: joints and geoms before their bodies,
   // group and space before the world, ODE closed last.
