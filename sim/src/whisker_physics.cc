@@ -355,17 +355,20 @@ void WhiskeredRobot::moveBase(double h) {
   double v = wheels_.v();
   Pose2 next = integrateArc(pose_, v, omega, h);
   // The bumper feels where the wheels would take the body, whether or not they can.
-  bool pressed = frontBumperPressed(next);
+  const bool pressed = frontBumperPressed(next);
+  bool refused = false;
   if (v != 0.0 && world_.bodyCollides(next) && clearance(next) < clearance(pose_) - 1e-12) {
     // No translation deeper into an obstacle (the wheels stall), ahead or behind; turning in
     // place is allowed (a round body cannot turn deeper).
     v = 0.0;
     next = integrateArc(pose_, 0.0, omega, h);
     ++refused_steps_;
+    refused = true;
   }
   setBaseBodies(v, omega, h);
   pose_ = next;
-  bumped_ = pressed || frontBumperPressed(pose_);
+  // Where the body ends, if not where the bumper was felt above.
+  bumped_ = pressed || (refused && frontBumperPressed(pose_));
 }
 
 bool WhiskeredRobot::frontBumperPressed(const Pose2& p) const {
