@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <sstream>
 
 #include "crunch/mapping/evaluation.h"
@@ -79,7 +80,11 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
   const std::vector<WhiskerMount>& mounts = sensor.mounts();
   const bool grid = eo.policy == exploration::ExplorePolicyKind::kGrid;
   const auto [lo, hi] = mapperRegion(scene, mounts, grid);
-  Mapper mapper(mounts, lo, hi, mopt);
+  // The known region's edges are the room's walls (the policies and the planner treat them so):
+  // the blackboard knows no leg stands beyond them.
+  MappingOptions room_opt = mopt;
+  room_opt.room = std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(width, depth)};
+  Mapper mapper(mounts, lo, hi, room_opt);
   exploration::KnownSpace known(Vec2(0, 0), Vec2(width, depth), eo.cell);
   auto policy = exploration::makePolicy(eo.policy, eo.policy_options);
   const MatchTolerance tol = matchToleranceFor(mopt.model);
@@ -172,9 +177,24 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
     lo_opts.explore = eo;
     lo_opts.seed = mopt.seed;
     session::ExploreLoop* loop_ptr = nullptr;
+    // Where the body drove is where no leg stands (Mapper::addBodySweep): the path the loop
+    // recorded since the last whisk, segment by segment, then on to `to`.
+    std::size_t swept = 0;
+    std::optional<Vec2> swept_to;
+    auto sweepTo = [&](const Vec2& to) {
+      const std::vector<Pose2>& path = loop_ptr->report().path;
+      for (; swept < path.size(); ++swept) {
+        const Vec2 p = path[swept].position();
+        mapper.addBodySweep(swept_to.value_or(p), p);
+        swept_to = p;
+      }
+      mapper.addBodySweep(swept_to.value_or(to), to);
+      swept_to = to;
+    };
     session::ExploreLoop::Hooks hooks{
         .whisked =
             [&](const Pose2& pose) {
+              sweepTo(pose.position());
               travel_now = loop_ptr->report().travel_m;
               whisks_now = loop_ptr->report().whisks - 1;  // the loop counted this one already
               whisked(pose);
@@ -229,6 +249,7 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
       }
       if (so.moved) so.moved(base.odometry(), base.now());
     }
+    sweepTo(base.odometry().position());
     run.report = loop.report();
   }
   run.report.teleport = eo.teleport;

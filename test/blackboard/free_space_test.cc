@@ -2,6 +2,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 #include "crunch/core/rng.h"
@@ -160,4 +161,71 @@ TEST_CASE("FreeSpace: memory follows the rays, not the arena (issue 16)", "[mapp
   CHECK(h.maxInSquare({63.995, 63.995, 0.0}, 0.04, 0.0) ==
         test::scanMaxInSquare(h, {63.995, 63.995, 0.0}, 0.04, 0.0));
   CHECK(h.maxInSquare({63.975, 63.975, 0.0}, 0.02, 0.0) == 0);
+}
+
+TEST_CASE("FreeSpace: the body's sweep adds its passes to every cell within the radius of the "
+          "segment, nothing beyond, and the look-up follows it",
+          "[mapping]") {
+  FreeSpaceGrid g({0, 0}, {2, 1}, 0.01);
+  const Vec2 a{0.5, 0.5}, b{1.3, 0.7};
+  const double r = 0.165;
+  g.addSweep(a, b, r, 2);
+  CHECK(g.rays() == 1);
+  const Vec2 d = b - a;
+  int inside = 0, outside = 0;
+  for (int iy = 0; iy < g.cellsY(); ++iy) {
+    for (int ix = 0; ix < g.cellsX(); ++ix) {
+      const Vec2 c = g.origin() + Vec2((ix + 0.5) * g.cell(), (iy + 0.5) * g.cell());
+      const double t = std::clamp((c - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      const double dist = (c - (a + t * d)).norm();
+      if (dist <= r - 1e-9) {
+        ++inside;
+        if (g.countAt(ix, iy) != 2) FAIL_CHECK("cell " << ix << "," << iy << " inside: " << g.countAt(ix, iy));
+      } else if (dist > r + 1e-9) {
+        ++outside;
+        if (g.countAt(ix, iy) != 0) FAIL_CHECK("cell " << ix << "," << iy << " outside: " << g.countAt(ix, iy));
+      }
+    }
+  }
+  // The capsule's area over a cell's: 2 r |ab| + pi r^2.
+  const double cells = (2 * r * d.norm() + kPi * r * r) / (g.cell() * g.cell());
+  CHECK(std::abs(inside - cells) < 0.02 * cells);
+  CHECK(outside > 0);
+  // A second, standing sweep (a == b) adds its passes to the disc only; the look-up agrees with
+  // the scan on cores inside, across the edge and outside.
+  g.addSweep(b, b, r, 1);
+  CHECK(g.count(b) == 3);
+  CHECK(g.count(a) == 2);
+  CHECK(g.count({1.9, 0.1}) == 0);
+  Rng rng(7);
+  for (int k = 0; k < 3000; ++k) {
+    const Pose2 pose{rng.uniform(0.2, 1.8), rng.uniform(0.1, 0.9), rng.uniform(-kPi, kPi)};
+    const double side = rng.uniform(0.02, 0.08), margin = rng.uniform(0.0, 0.015);
+    const int want = test::scanMaxInSquare(g, pose, side, margin);
+    if (g.maxInSquare(pose, side, margin) != want) FAIL_CHECK("pose " << pose.x << "," << pose.y);
+  }
+  // Bad input sweeps nothing.
+  g.addSweep({std::nan(""), 0.5}, b, r, 5);
+  g.addSweep(a, b, -1.0, 5);
+  g.addSweep(a, b, r, 0);
+  CHECK(g.count(a) == 2);
+  CHECK(g.rays() == 2);
+}
+
+TEST_CASE("FreeSpace: beyond the room's walls every core is swept, count() is not",
+          "[mapping]") {
+  FreeSpaceGrid g({-0.3, -0.3}, {2.3, 1.3}, 0.01);
+  g.addRay({{0.2, 0.5}, {0.8, 0.5}});
+  const long long rays = g.rays();
+  const int inside = g.maxInSquare({0.5, 0.5, 0.2}, 0.06, 0.015);
+  CHECK(inside == 1);
+  CHECK(g.maxInSquare({2.15, 0.5, 0.0}, 0.04, 0.015) == 0);  // beyond x = 2 but no room yet
+  g.setRoom({0, 0}, {2, 1});
+  CHECK(g.rays() == rays + 1);
+  CHECK(g.maxInSquare({0.5, 0.5, 0.2}, 0.06, 0.015) == inside);
+  CHECK(g.maxInSquare({1.95, 0.95, 0.0}, 0.04, 0.015) == 0);  // inside, unswept
+  CHECK(g.maxInSquare({2.15, 0.5, 0.0}, 0.04, 0.015) == 65535);  // beyond, inside the grid
+  CHECK(g.maxInSquare({-0.01, 0.5, 0.0}, 0.04, 0.015) == 65535);
+  CHECK(g.maxInSquare({5.0, 5.0, 0.0}, 0.04, 0.015) == 65535);  // beyond the grid too
+  CHECK(g.count({2.15, 0.5}) == 0);
 }

@@ -599,3 +599,74 @@ TEST_CASE("sweptLayer: a large swept extent is written in blocks within the cell
   CHECK(f.at(1499, 1499));
   CHECK_FALSE(f.at(700, 700));
 }
+
+TEST_CASE("Mapper::addBodySweep: a body that drove through a leg's place rules the table out, "
+          "off, it changes nothing",
+          "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const Pose2 truth{1.5, 1.2, 0.3};
+  const auto [lo, hi] = reach(script.poses, mounts);
+  // The +x+y leg's centre, and a drive through it along the table's short side.
+  const double hx = 0.5 * (kStandardTableWidth - kStandardLegSide);
+  const double hy = 0.5 * (kStandardTableDepth - kStandardLegSide);
+  const Vec2 leg = truth.toWorld(Vec2{hx, hy});
+  const Vec2 along = Vec2{std::cos(truth.theta), std::sin(truth.theta)};
+  auto run = [&](MappingOptions o, bool sweep) {
+    Mapper m(mounts, lo, hi, o);
+    for (std::size_t i = 0; i < script.poses.size(); ++i) {
+      if (sweep && i == script.poses.size() / 2) m.addBodySweep(leg - 0.3 * along, leg + 0.3 * along);
+      m.addPose(script.poses[i], script.reports[i], script.rays[i]);
+    }
+    return m.finish();
+  };
+  auto nearTruth = [&](const Map& map) {
+    int n = 0;
+    for (const MapTable& t : map.tables)
+      n += std::hypot(t.pose.x - truth.x, t.pose.y - truth.y) < 0.05;
+    return n;
+  };
+  for (const std::uint64_t seed : {std::uint64_t{1}, std::uint64_t{2}}) {
+    INFO("seed " << seed);
+    const MappingOptions o = options(seed, 4);
+    const Map plain = run(o, false);
+    CHECK(nearTruth(plain) == 1);
+    CHECK(nearTruth(run(o, true)) == 0);
+    MappingOptions off = o;
+    off.body_sweep = false;
+    requireSameMap(run(off, true), plain);
+  }
+}
+
+TEST_CASE("Mapper: a room bound rules out a table standing beyond the room's wall, and is "
+          "validated",
+          "[mapping][mapper]") {
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const Pose2 truth{1.5, 1.2, 0.3};
+  auto [lo, hi] = reach(script.poses, mounts);
+  auto nearTruth = [&](const Map& map) {
+    int n = 0;
+    for (const MapTable& t : map.tables)
+      n += std::hypot(t.pose.x - truth.x, t.pose.y - truth.y) < 0.05;
+    return n;
+  };
+  auto run = [&](const MappingOptions& o) {
+    Mapper m(mounts, lo, hi, o);
+    for (std::size_t i = 0; i < script.poses.size(); ++i)
+      m.addPose(script.poses[i], script.reports[i], script.rays[i]);
+    return m.finish();
+  };
+  MappingOptions o = options(1, 4);
+  // A room holding the whole table keeps it; one whose wall cuts through the table's +x legs
+  // (x = truth.x: the legs beyond it cannot be) does not.
+  o.room = std::pair<Vec2, Vec2>{lo, hi};
+  CHECK(nearTruth(run(o)) == 1);
+  o.room = std::pair<Vec2, Vec2>{lo, Vec2(truth.x, hi.y())};
+  CHECK(nearTruth(run(o)) == 0);
+  o.room = std::pair<Vec2, Vec2>{Vec2(1, 1), Vec2(1, 2)};
+  CHECK_FALSE(o.validate());
+  CHECK(o.validate().error().message.find("room") != std::string::npos);
+  o.room = std::pair<Vec2, Vec2>{Vec2(0, std::nan("")), Vec2(1, 2)};
+  CHECK_FALSE(o.validate());
+}

@@ -111,7 +111,9 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
        {"seed", "start", "area", "checksum_includes_header", "onset_threshold", "mapping"}) {
     CHECK(st.contains(key));
   }
-  CHECK(st["mapping"].size() == 14);
+  CHECK(st["mapping"].size() == 16);
+  CHECK(st["mapping"]["body_sweep"] == true);
+  CHECK(st["mapping"]["room_bounds"] == true);
   CHECK(st["mapping"]["chain_fusion"] == "marginal");
   CHECK(st["mapping"]["marginal_steps"] == 3);
   CHECK(st["mapping"]["acceptance"] == "rj");
@@ -160,6 +162,34 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     auto got = session::sessionFromMetadata(meta.dump(), "recording test.crec");
     REQUIRE(got);
     CHECK(got.value().mapping.chain_fusion == ChainFusion::kVote);
+  }
+  SECTION("body_sweep round-trips; a recording from before it was recorded maps without it") {
+    CHECK(json::parse(good)["settings"]["mapping"]["body_sweep"] == true);
+    json meta = json::parse(good);
+    meta["settings"]["mapping"]["body_sweep"] = false;
+    auto off = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(off);
+    CHECK_FALSE(off.value().mapping.body_sweep);
+    meta["settings"]["mapping"].erase("body_sweep");
+    auto old = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(old);
+    CHECK_FALSE(old.value().mapping.body_sweep);
+    meta["settings"]["mapping"]["body_sweep"] = 1;
+    CHECK(errorOf(meta.dump()).find("settings.mapping.body_sweep") != std::string::npos);
+  }
+  SECTION("room_bounds round-trips; a recording from before it was recorded has none") {
+    CHECK(json::parse(good)["settings"]["mapping"]["room_bounds"] == true);
+    json meta = json::parse(good);
+    meta["settings"]["mapping"]["room_bounds"] = false;
+    auto off = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(off);
+    CHECK_FALSE(off.value().room_bounds);
+    meta["settings"]["mapping"].erase("room_bounds");
+    auto old = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+    REQUIRE(old);
+    CHECK_FALSE(old.value().room_bounds);
+    meta["settings"]["mapping"]["room_bounds"] = "yes";
+    CHECK(errorOf(meta.dump()).find("settings.mapping.room_bounds") != std::string::npos);
   }
   SECTION("a recording from before marginal_steps and acceptance were recorded") {
     json meta = json::parse(good);

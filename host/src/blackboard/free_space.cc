@@ -85,6 +85,32 @@ void FreeSpaceGrid::addRay(const FreeRay& ray) {
   }
 }
 
+void FreeSpaceGrid::addSweep(const Vec2& a, const Vec2& b, double radius, int passes) {
+  if (!(radius >= 0) || passes <= 0 || !std::isfinite(a.x()) || !std::isfinite(a.y()) ||
+      !std::isfinite(b.x()) || !std::isfinite(b.y()))
+    return;
+  ++rays_;
+  const Vec2 d = b - a;
+  const double len2 = d.squaredNorm();
+  const auto cellOf = [this](double v, double lo) { return static_cast<int>(std::floor((v - lo) / cell_)); };
+  const int x0 = std::max(0, cellOf(std::min(a.x(), b.x()) - radius, lo_.x()));
+  const int y0 = std::max(0, cellOf(std::min(a.y(), b.y()) - radius, lo_.y()));
+  const int x1 = std::min(nx_ - 1, cellOf(std::max(a.x(), b.x()) + radius, lo_.x()));
+  const int y1 = std::min(ny_ - 1, cellOf(std::max(a.y(), b.y()) + radius, lo_.y()));
+  const double r2 = radius * radius;
+  for (int iy = y0; iy <= y1; ++iy) {
+    for (int ix = x0; ix <= x1; ++ix) {
+      const Vec2 c = lo_ + Vec2((ix + 0.5) * cell_, (iy + 0.5) * cell_);
+      const double t = len2 > 0 ? std::clamp((c - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+      if ((c - (a + t * d)).squaredNorm() > r2) continue;
+      const int v = std::min<int>(std::numeric_limits<uint16_t>::max(), value(0, ix, iy) + passes);
+      if (v == value(0, ix, iy)) continue;
+      slot(0, ix, iy) = static_cast<uint16_t>(v);
+      raise(ix, iy, static_cast<uint16_t>(v));
+    }
+  }
+}
+
 void FreeSpaceGrid::raise(int ix, int iy, uint16_t v) {
   // Every window of side 2s containing the cell contains the window of side s that holds the
   // cell in its quarter, and every stored maximum is exact: once no window of side s needed
@@ -159,7 +185,17 @@ int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
   return best;
 }
 
+void FreeSpaceGrid::setRoom(const Vec2& lo, const Vec2& hi) {
+  ++rays_;
+  room_ = true;
+  room_lo_ = lo;
+  room_hi_ = hi;
+}
+
 int FreeSpaceGrid::maxInSquare(const Pose2& pose, double side, double margin) const {
+  if (room_ && !(pose.x >= room_lo_.x() && pose.x <= room_hi_.x() && pose.y >= room_lo_.y() &&
+                 pose.y <= room_hi_.y()))
+    return std::numeric_limits<uint16_t>::max();
   const double h = 0.5 * side - margin;
   if (h <= 0) return count(pose.position());
   // The cells of the core's bounding box, as the reference scan (free_space_scan.h) takes them.

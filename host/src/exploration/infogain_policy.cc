@@ -79,6 +79,104 @@ void InfogainPolicy::prepare(const ExploreState& state) {
   lambda_ = (io_.prior_legs + legs) / (io_.prior_area_m2 + known_m2);
   stamp_.assign(static_cast<size_t>(k.nx() * k.ny()), 0);
   stamp_now_ = 0;
+  path_stamp_.assign(static_cast<size_t>(k.nx() * k.ny()), 0);
+  path_stamp_now_ = 0;
+  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  for (const WhiskerMount& m : predictor_.mounts()) {
+    rmin = std::min(rmin, m.base.norm());
+    rmax = std::max(rmax, (m.base + m.length * m.direction()).norm());
+  }
+  // Every cell a whisk's rays can count lies within a cell of the annulus.
+  const double c = k.cell();
+  const double r0 = std::max(0.0, rmin - c), r1 = rmax + c;
+  ring_cells_max_ = kPi * (r1 * r1 - r0 * r0) / (c * c);
+  sweepBand(state);
+}
+
+void InfogainPolicy::sweepBand(const ExploreState& state) {
+  const KnownSpace& k = state.known;
+  const int nx = k.nx(), ny = k.ny();
+  band_.assign(static_cast<size_t>(nx * ny), 0);
+  if (!io_.path_sweep) return;
+  // The body's disc in cell offsets (cell centres within the radius, as markBody marks), and
+  // for each of the 8 steps (dx, dy) its leading edge: the offsets o with o + (dx, dy) outside
+  // the disc, i.e. the cells a step from a parent to its child newly covers.
+  const double radius = state.costmap.options().robot_radius;
+  const int rc = static_cast<int>(std::ceil(radius / k.cell())) + 1;
+  auto inDisc = [&](int dx, int dy) { return std::hypot(dx, dy) * k.cell() <= radius; };
+  disc_dx_.clear();
+  disc_dy_.clear();
+  for (int dy = -rc; dy <= rc; ++dy)
+    for (int dx = -rc; dx <= rc; ++dx)
+      if (inDisc(dx, dy)) {
+        disc_dx_.push_back(dx);
+        disc_dy_.push_back(dy);
+      }
+  edge_begin_.assign(10, 0);
+  edge_dx_.clear();
+  edge_dy_.clear();
+  for (int s = 0; s < 9; ++s) {  // step (dx, dy) = (s % 3 - 1, s / 3 - 1)
+    edge_begin_[static_cast<size_t>(s)] = static_cast<int>(edge_dx_.size());
+    const int sx = s % 3 - 1, sy = s / 3 - 1;
+    for (size_t q = 0; q < disc_dx_.size(); ++q)
+      if (!inDisc(disc_dx_[q] + sx, disc_dy_[q] + sy)) {
+        edge_dx_.push_back(disc_dx_[q]);
+        edge_dy_.push_back(disc_dy_[q]);
+      }
+  }
+  edge_begin_[9] = static_cast<int>(edge_dx_.size());
+  auto unknown = [&](int x, int y) {
+    return x >= 0 && y >= 0 && x < nx && y < ny && k.at(x, y) == KnownSpace::Cell::kUnknown;
+  };
+  // Parents before children: the tree's cells in order of their cost.
+  std::vector<int> order;
+  for (int i = 0; i < nx * ny; ++i)
+    if (std::isfinite(state.travel.cost(i))) order.push_back(i);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return state.travel.cost(a) < state.travel.cost(b) || (state.travel.cost(a) == state.travel.cost(b) && a < b);
+  });
+  for (const int i : order) {
+    const int x = i % nx, y = i / nx;
+    const int p = state.travel.parent(i);
+    int n = 0;
+    if (p < 0) {
+      for (size_t q = 0; q < disc_dx_.size(); ++q) n += unknown(x + disc_dx_[q], y + disc_dy_[q]);
+    } else {
+      n = band_[static_cast<size_t>(p)];
+      const int s = (x - p % nx + 1) + 3 * (y - p / nx + 1);
+      for (int q = edge_begin_[static_cast<size_t>(s)]; q < edge_begin_[static_cast<size_t>(s) + 1]; ++q)
+        n += unknown(x + edge_dx_[static_cast<size_t>(q)], y + edge_dy_[static_cast<size_t>(q)]);
+    }
+    band_[static_cast<size_t>(i)] = n;
+  }
+}
+
+int InfogainPolicy::bandAt(const ExploreState& state, const Vec2& p) const {
+  int ix, iy;
+  if (!state.known.index(p, ix, iy)) return 0;
+  return band_[static_cast<size_t>(iy * state.known.nx() + ix)];
+}
+
+void InfogainPolicy::stampPathEnd(const ExploreState& state, int cell) {
+  ++path_stamp_now_;
+  if (!io_.path_sweep) return;
+  const KnownSpace& k = state.known;
+  const int nx = k.nx(), ny = k.ny();
+  double reach = 0.0;
+  for (const WhiskerMount& m : predictor_.mounts())
+    reach = std::max(reach, (m.base + m.length * m.direction()).norm());
+  reach += state.costmap.options().robot_radius + k.cell();
+  double back = 0.0;
+  for (int j = cell; j >= 0 && back <= reach;) {
+    const int x = j % nx, y = j / nx;
+    for (size_t q = 0; q < disc_dx_.size(); ++q) {
+      const int ix = x + disc_dx_[q], iy = y + disc_dy_[q];
+      if (ix >= 0 && iy >= 0 && ix < nx && iy < ny) path_stamp_[static_cast<size_t>(iy * nx + ix)] = path_stamp_now_;
+    }
+    const int p = state.travel.parent(j);
+    if (p >= 0) back += k.cell() * ((p % nx != x && p / nx != y) ? std::sqrt(2.0) : 1.0);
+    j = p;
+  }
 }
 
 void InfogainPolicy::gather(const Vec2& position) {
@@ -166,7 +264,7 @@ double InfogainPolicy::sampleBits(const Pose2& pose) {
   return h;
 }
 
-double InfogainPolicy::positionBound(double cell) const {
+double InfogainPolicy::positionBound(double cell, int band) const {
   // The draws' outcome classes are unions of the groups of draws with identical objects in
   // reach, so H(Y) is at most the entropy of those groups' sizes; the unswept area one heading
   // sweeps is at most the whole ring's, and H_b grows up to p = 1/2.
@@ -180,7 +278,7 @@ double InfogainPolicy::positionBound(double cell) const {
       if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
   }
   // unknownOutcomeBits grows with the area.
-  const double area = static_cast<double>(ray_cells_.size()) * cell * cell;
+  const double area = static_cast<double>(ray_cells_.size() + static_cast<size_t>(band)) * cell * cell;
   return h + unknownOutcomeBits(lambda_, area, io_.prediction.resolution) + 1e-12;
 }
 
@@ -218,8 +316,8 @@ void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
   ray_begin_[static_cast<size_t>(n_rays_)] = static_cast<int>(ray_cells_.size());
 }
 
-double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose) {
-  // Requires march(state.known, pose.position()).
+double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose, double* area_m2) {
+  // Requires march(state.known, pose.position()) and stampPathEnd(its cell).
   const double cell = state.known.cell();
   ++stamp_now_;
   int unknown = 0;
@@ -235,14 +333,17 @@ double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose)
       for (int q = ray_begin_[static_cast<size_t>(j)]; q < ray_begin_[static_cast<size_t>(j) + 1]; ++q) {
         const double rad = ray_radius_[static_cast<size_t>(q)];
         if (rad < r0 || rad > r1) continue;
-        int& s = stamp_[static_cast<size_t>(ray_cells_[static_cast<size_t>(q)])];
+        const size_t cq = static_cast<size_t>(ray_cells_[static_cast<size_t>(q)]);
+        int& s = stamp_[cq];
         if (s == stamp_now_) continue;
         s = stamp_now_;
+        if (path_stamp_[cq] == path_stamp_now_) continue;  // the drive sweeps it already
         ++unknown;
       }
     }
   }
-  const double area = unknown * cell * cell;
+  const double area = (unknown + bandAt(state, pose.position())) * cell * cell;
+  if (area_m2) *area_m2 = area;
   return unknownOutcomeBits(lambda_, area, io_.prediction.resolution);
 }
 
@@ -254,8 +355,11 @@ CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pos
   if (!std::isfinite(v.travel_m) || whiskedBefore(pose)) return v;
   gather(pose.position());
   march(state.known, pose.position());
+  int ix, iy;
+  state.known.index(pose.position(), ix, iy);
+  stampPathEnd(state, iy * state.known.nx() + ix);
   v.sample_bits = sampleBits(pose);
-  v.unknown_bits = unknownBits(state, pose);
+  v.unknown_bits = unknownBits(state, pose, &v.unknown_m2);
   v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
   return v;
 }
@@ -298,17 +402,22 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
                                [&](const Pose2& a, const Pose2& b) { return key(a) == key(b); }),
                    candidates.end());
 
-  // Nearest first; a candidate is worth at most log2(draws) bits from the draws and 1 bit
-  // (a Bernoulli) from unswept space, so once that bound over the travel falls below the best
-  // score no farther candidate can win (exact branch and bound; the lattice's headings of one
-  // position stay together, the sort being stable).
+  // Nearest first; a candidate is worth at most log2(draws) bits from the draws and
+  // unknownOutcomeBits of the largest band plus a whole annulus from unswept space, so once
+  // that bound over the travel falls below the best score no farther candidate can win (exact
+  // branch and bound; the lattice's headings of one position stay together, the sort being
+  // stable).
   std::vector<double> travel(candidates.size());
   for (size_t i = 0; i < candidates.size(); ++i) travel[i] = state.travel.to(candidates[i].position());
   std::vector<size_t> order(candidates.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return travel[a] < travel[b]; });
-  const double max_bits =
-      (obstacles_.size() > 1 ? std::log2(static_cast<double>(obstacles_.size())) : 0.0) + 1.0;
+  const double draw_bits = obstacles_.size() > 1 ? std::log2(static_cast<double>(obstacles_.size())) : 0.0;
+  const double cell2 = state.known.cell() * state.known.cell();
+  auto boundWithBand = [&](int band) {
+    return draw_bits + unknownOutcomeBits(lambda_, (band + ring_cells_max_) * cell2, io_.prediction.resolution) + 1e-12;
+  };
+  const double max_bits = boundWithBand(band_.empty() ? 0 : *std::max_element(band_.begin(), band_.end()));
   Decision d;
   int best = -1;
   Vec2 gathered{std::numeric_limits<double>::quiet_NaN(), 0.0};
@@ -321,11 +430,21 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
     v.pose = c;
     v.travel_m = travel[ci];
     if (std::isfinite(v.travel_m) && !whiskedBefore(c)) {
+      const int band = bandAt(state, c.position());
+      // A cheap bound first, before the draws are gathered.
+      if (best >= 0 && boundWithBand(band) / (v.travel_m + io_.whisk_cost_m) <=
+                           values_[static_cast<size_t>(best)].score) {
+        values_.push_back(v);
+        continue;
+      }
       if (!(c.position() == gathered)) {  // the lattice's headings share a position
         gather(c.position());
         march(state.known, c.position());
+        int ix, iy;
+        state.known.index(c.position(), ix, iy);
+        stampPathEnd(state, iy * state.known.nx() + ix);
         gathered = c.position();
-        position_bound = positionBound(state.known.cell());
+        position_bound = positionBound(state.known.cell(), band);
       }
       // No heading here can beat the best: skip the predictions (exact, see positionBound).
       if (best >= 0 && position_bound / (v.travel_m + io_.whisk_cost_m) <=
@@ -334,7 +453,7 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
         continue;
       }
       v.sample_bits = sampleBits(c);
-      v.unknown_bits = unknownBits(state, c);
+      v.unknown_bits = unknownBits(state, c, &v.unknown_m2);
       v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
     }
     values_.push_back(v);

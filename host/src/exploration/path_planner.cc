@@ -205,9 +205,9 @@ std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const
 }
 
 DistanceField::DistanceField(const Costmap& costmap, const Vec2& from) : costmap_(costmap) {
-  std::vector<int> parent;
-  if (search(costmap, from, -1, dist_, parent) < 0) {
+  if (search(costmap, from, -1, dist_, parent_) < 0) {
     dist_.assign(static_cast<std::size_t>(costmap.known().nx()) * costmap.known().ny(), kInf);
+    parent_.assign(dist_.size(), -1);
   }
 }
 

@@ -7,6 +7,7 @@
 #include "crunch/mapping/global_chain.h"
 #include "crunch/mapping/posterior_marginals.h"
 #include "crunch/mapping/wall_fusion.h"
+#include "crunch/robot/whiskers.h"  // kRobotRadius
 
 namespace crunch {
 
@@ -211,6 +212,12 @@ Mapper::Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,
       sample_rng_(options.seed ^ 0x5A3B1E5ull) {
   // Tables of different sizes at one spot are different objects (a chair and a table).
   options_.fuse.compare_sizes = options_.model.sized();
+  if (options_.room) free_space_.setRoom(options_.room->first, options_.room->second);
+}
+
+void Mapper::addBodySweep(const Vec2& a, const Vec2& b) {
+  if (!options_.body_sweep || !options_.negative_evidence) return;
+  free_space_.addSweep(a, b, kRobotRadius, options_.model.free_pass_cap);
 }
 
 int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,

@@ -1,5 +1,7 @@
 #include "crunch/mapping/mapping_options.h"
 
+#include <cmath>
+
 #include <algorithm>
 
 #include "crunch/core/range_check.h"
@@ -21,6 +23,12 @@ Status MappingOptions::validate() const {
                            checkRange("marginal_keep", marginal_keep, 0.0, 0.999999)};
   for (const Status& s : checks) {
     if (!s) return s;
+  }
+  if (room) {
+    const auto& [lo, hi] = *room;
+    if (!(std::isfinite(lo.x()) && std::isfinite(lo.y()) && std::isfinite(hi.x()) &&
+          std::isfinite(hi.y()) && lo.x() < hi.x() && lo.y() < hi.y()))
+      return Error{"room: its corners must be finite, the first below and left of the second"};
   }
   return okStatus();
 }

@@ -43,11 +43,20 @@ Result<std::unique_ptr<RobotSession>> RobotSession::create(const RobotSessionOpt
   return std::unique_ptr<RobotSession>(new RobotSession(options, std::move(chain).value()));
 }
 
+namespace {
+MappingOptions withRoom(const RobotSessionOptions& o) {
+  MappingOptions m = o.mapping;
+  m.room.reset();
+  if (o.room_bounds) m.room = std::pair<Vec2, Vec2>{o.area_lo, o.area_hi};
+  return m;
+}
+}  // namespace
+
 RobotSession::RobotSession(const RobotSessionOptions& options, std::unique_ptr<SensingChain> chain)
     : options_(options),
       chain_(std::move(chain)),
       tracker_(io::oi::StreamParserOptions{options.checksum_includes_header, 0}),
-      mapper_(options.mounts, options.area_lo, options.area_hi, options.mapping) {}
+      mapper_(options.mounts, options.area_lo, options.area_hi, withRoom(options)) {}
 
 Pose2 RobotSession::pose() const { return compose(options_.start, tracker_.odometry()); }
 
@@ -78,6 +87,17 @@ void RobotSession::feedCreate(const io::Chunk& chunk) {
   for (std::size_t k = 0; k < found; ++k) {
     const std::uint64_t back = static_cast<std::uint64_t>(found - 1 - k) * kStreamPeriodNs;
     track_.add(chunk.t_ns > back ? chunk.t_ns - back : 0, packet_totals_[k], packet_poses_[k]);
+  }
+  if (found > 0) sweepBody(false);
+}
+
+void RobotSession::sweepBody(bool to_end) {
+  // Where the odometry says the body drove, no leg stands: swept in kSweepStep pieces (the
+  // Create's path between two is near straight), from the first pose the Create reported.
+  const Vec2 here = pose().position();
+  if (!swept_to_ || to_end || (here - *swept_to_).norm() >= kSweepStep) {
+    mapper_.addBodySweep(swept_to_.value_or(here), here);
+    swept_to_ = here;
   }
 }
 
@@ -150,6 +170,7 @@ Status RobotSession::bridgeReconnected(std::uint64_t t_ns) {
 Map RobotSession::finish() {
   chain_->release(std::numeric_limits<std::uint64_t>::max(),
                   [this](std::uint64_t t) { return poseAt(t); });
+  if (swept_to_) sweepBody(true);
   closeWhisk();
   return mapper_.finish();
 }

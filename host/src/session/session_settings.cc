@@ -38,7 +38,9 @@ json settingsJson(const RobotSessionOptions& s) {
             {"acceptance", acceptanceName(so.acceptance)},
             {"model", objectModelName(s.mapping.model.objects)},
             {"sigma_r_shapelet", s.mapping.model.sigma_r_shapelet},
-            {"sigma_theta_shapelet", s.mapping.model.sigma_theta_shapelet}}}};
+            {"sigma_theta_shapelet", s.mapping.model.sigma_theta_shapelet},
+            {"body_sweep", s.mapping.body_sweep},
+            {"room_bounds", s.room_bounds}}}};
 }
 
 // The settings object onto the models' session options: every field required, unknown ones
@@ -68,7 +70,7 @@ void readSettings(const json& st, RobotSessionOptions& s) {
   expectObject(m, mp, {"working_memory", "schedule_steps", "sweeps", "smart_proposals",
                        "smart_gain", "min_support", "global_sweeps", "global_chains",
                        "chain_fusion", "marginal_steps", "acceptance", "model", "sigma_r_shapelet",
-                       "sigma_theta_shapelet"});
+                       "sigma_theta_shapelet", "body_sweep", "room_bounds"});
   auto whole = [&m, &mp](std::string_view key) {
     return integer(required(m, mp, key), member(mp, key));
   };
@@ -112,6 +114,10 @@ void readSettings(const json& st, RobotSessionOptions& s) {
     if (!model) fail(path, model.error().message);
     s.mapping.model.objects = model.value();
   }
+  // Recordings made before it was recorded mapped without the body's sweep.
+  s.mapping.body_sweep = m.contains("body_sweep") && requiredBool(m, mp, "body_sweep");
+  // ... and without the room's bounds (RobotSessionOptions::room_bounds).
+  s.room_bounds = m.contains("room_bounds") && requiredBool(m, mp, "room_bounds");
   s.mapping.model.sigma_r_shapelet = requiredNumber(m, mp, "sigma_r_shapelet");
   s.mapping.model.sigma_theta_shapelet = requiredNumber(m, mp, "sigma_theta_shapelet");
 }

@@ -52,6 +52,18 @@ class FreeSpaceGrid {
   // Counts one pass through every cell the segment crosses (each cell once per ray); counts
   // saturate at 65535.
   void addRay(const FreeRay& ray);
+  // The robot's body moved from a to b (a disc of `radius` swept along the segment; a == b: it
+  // stood there): every cell whose centre lies within `radius` of the segment gains `passes`
+  // passes (saturating). A leg there would have stopped the body, so the mapper charges it
+  // like a whisker's full pass cap (mapper.h, addBodySweep). Counted as one ray.
+  void addSweep(const Vec2& a, const Vec2& b, double radius, int passes);
+
+  // The room's walls bound [lo, hi] (the robot's known region: its edges are walls): no leg
+  // stands beyond them, so maxInSquare() answers 65535 (saturated, as certain as any sweep) for
+  // a core whose centre lies outside, inside the grid or not. count() is unchanged (a wall's
+  // term reads both its sides, and a wall at the room's edge has nothing swept behind it).
+  // Counted as one ray (the cached terms change).
+  void setRoom(const Vec2& lo, const Vec2& hi);
 
   // Passes through the cell containing p.
   int count(const Vec2& p) const;
@@ -113,6 +125,8 @@ class FreeSpaceGrid {
 
   Vec2 lo_;
   double cell_;
+  bool room_ = false;
+  Vec2 room_lo_{0, 0}, room_hi_{0, 0};
   int nx_ = 0, ny_ = 0;
   int tiles_x_ = 0;
   // tiles_[tileOf(ix, iy)]: the cell's tile, or the shared zero tile if no ray reached it.

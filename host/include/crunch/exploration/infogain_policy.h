@@ -20,6 +20,17 @@
 //     (their mean count) over the area the robot knows: lambda = (1 + legs) / (1 + known m^2).
 //     The two sources are added (independent: one concerns hypotheses, the other space that no
 //     hypothesis covers).
+//     The unswept area counts the drive as well as the whisk: on its way to c the body (and the
+//     whiskers ahead of it) sweeps a band of the body's width along the planned path, and a
+//     leg in that band is touched on the way (a transit touch: the loop stops and whisks
+//     there) or bumped. So A = the unknown cells of the band (the body's disc, radius
+//     PlannerOptions::robot_radius, the disc KnownSpace::markBody marks, along the
+//     DistanceField's shortest-path tree to c) united with those of the whisk at c. The band
+//     is summed once per decision over the whole tree (each step adds its disc's leading
+//     edge: exact for a path that does not come back within a body width of itself, an upper
+//     bound otherwise) and the whisk's cells already in the band's last body widths are not
+//     counted twice. Without it (path_sweep false) a policy sees no value in driving through
+//     unknown space and nibbles at it a whisk's annulus at a time (docs/EXPLORATION.md).
 // score(c) = I(Y; M) / (travel(c) + whisk_cost_m), travel from the DistanceField. The whisk
 // itself costs time (8 s: pi/12 each way at pi/24 rad/s, and back), counted as the metres the
 // base would drive in that time. A pose already whisked (within resolution-sized tolerance)
@@ -51,6 +62,7 @@ struct InfogainOptions {
   double aim_distance = 0.235;
   double prior_legs = 1.0;     // Gamma prior on the leg density: shape (legs) ...
   double prior_area_m2 = 1.0;  // ... and rate (m^2)
+  bool path_sweep = true;      // count the unknown band swept on the way to a candidate
   WhiskPredictionOptions prediction;
 };
 
@@ -58,7 +70,8 @@ struct InfogainOptions {
 struct CandidateValue {
   Pose2 pose;
   double sample_bits = 0.0;   // H of the draws' outcome partition
-  double unknown_bits = 0.0;  // H_b(p) of touching something in unswept space
+  double unknown_bits = 0.0;  // H of touching something in unswept space (path and whisk)
+  double unknown_m2 = 0.0;    // that unswept area
   double travel_m = 0.0;
   double score = 0.0;         // bits per metre
 };
@@ -86,9 +99,16 @@ class InfogainPolicy final : public ExplorePolicy {
   // The unknown cells each ray from `position` would sweep; unknownBits(pose) needs
   // march(known, pose.position()) first.
   void march(const KnownSpace& known, const Vec2& position);
-  // An upper bound on any heading's bits at the gathered and marched position.
-  double positionBound(double cell) const;
-  double unknownBits(const ExploreState& state, const Pose2& pose);
+  // An upper bound on any heading's bits at the gathered and marched position, whose path
+  // sweeps `band` unknown cells.
+  double positionBound(double cell, int band) const;
+  double unknownBits(const ExploreState& state, const Pose2& pose, double* area_m2 = nullptr);
+  // band_: unknown cells swept by the body along the shortest-path tree (path_sweep).
+  void sweepBand(const ExploreState& state);
+  // Stamps the body's discs of the path's last cells before `cell`, as far back as a whisk at
+  // `cell` can reach (unknownBits then skips them).
+  void stampPathEnd(const ExploreState& state, int cell);
+  int bandAt(const ExploreState& state, const Vec2& p) const;
   bool whiskedBefore(const Pose2& pose) const;
 
   PolicyOptions options_;
@@ -107,6 +127,12 @@ class InfogainPolicy final : public ExplorePolicy {
   mutable std::vector<int> bound_scratch_;
   std::vector<int> stamp_;
   int stamp_now_ = 0;
+  std::vector<int> band_;           // per cell
+  std::vector<int> path_stamp_;     // per cell: the position whose path end covers it
+  int path_stamp_now_ = 0;
+  std::vector<int> disc_dx_, disc_dy_;  // the body's disc, cell offsets
+  std::vector<int> edge_begin_, edge_dx_, edge_dy_;  // per step direction: its leading edge
+  double ring_cells_max_ = 0.0;     // cells of the whole whisker annulus (a bound)
   double lambda_ = 1.0;
   std::vector<Pose2> whisked_;
   std::vector<CandidateValue> values_;

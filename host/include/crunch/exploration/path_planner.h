@@ -68,10 +68,18 @@ class DistanceField {
   // Metres (cost-weighted) to the cell holding p; infinity if blocked or unreachable.
   double to(const Vec2& p) const;
   double to(int ix, int iy) const;
+  // The cell before cell `i` (iy * nx + ix) on its shortest path from the start; -1 for the
+  // start and for cells not reached. Parents always cost less than their children, so
+  // following them from any reached cell ends at the start.
+  int parent(int i) const { return parent_[static_cast<std::size_t>(i)]; }
+  // The search's cost-weighted metres to cell `i` (infinity if not reached), without to()'s
+  // blocked check (a start inside an inflated zone reaches blocked cells on its way out).
+  double cost(int i) const { return dist_[static_cast<std::size_t>(i)]; }
 
  private:
   const Costmap& costmap_;
   std::vector<double> dist_;
+  std::vector<int> parent_;
 };
 
 }  // namespace crunch::exploration

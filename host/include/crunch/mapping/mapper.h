@@ -48,6 +48,15 @@ class Mapper {
   int addPose(const Pose2& pose, std::span<const ContactReport> reports,
               std::span<const FreeRay> free_rays);
 
+  // The robot's body moved from `a` to `b` (or stood at a == b): no leg can stand within
+  // kRobotRadius of that segment, or the body would have hit it. Negative evidence for the
+  // global inference and the posterior draws as certain as a whisker's full pass cap
+  // (model.free_pass_cap passes in every cell swept). Nothing when options.body_sweep or
+  // options.negative_evidence is off. The caller gives the moves its odometry saw: --robot's
+  // session from the Create's stream (so --replay sweeps the same), --sim --explore from the
+  // driven base's path; teleported poses sweep nothing.
+  void addBodySweep(const Vec2& a, const Vec2& b);
+
   // The map so far: per-pose MAPs, shapelets, and tables fused by clustering (no random draws).
   Map snapshot() const;
   // The final map: the global inference (options.global_sweeps > 0; its chains in parallel on

@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
+#include <utility>
 #include <string>
 
 #include "crunch/blackboard/blackboard.h"
@@ -63,6 +65,14 @@ struct MappingOptions {
   // The global inference also weighs negative evidence: where whiskers swept and touched
   // nothing (free_space.h). Per-pose MAPs never do (the paper's collation).
   bool negative_evidence = true;
+  // ... including where the robot's body drove (Mapper::addBodySweep). Recordings made before
+  // it was recorded in their metadata replay without it (the map they were recorded with).
+  bool body_sweep = true;
+  // The room: where the robot's known region ends its walls stand, and no leg stands beyond
+  // (FreeSpaceGrid::setRoom; with negative_evidence). --sim --explore: the arena; --robot: the
+  // mapped area (recordings from before it was recorded: none). Unset: the paper's runs, whose
+  // pose list says nothing of where the room ends.
+  std::optional<std::pair<Vec2, Vec2>> room;
   // Called after each pose with (poses done, poses total); may be empty.
   std::function<void(int, int)> progress;
   // sampler.after_temperature and sampler.after_sweep are called by the per-pose annealings

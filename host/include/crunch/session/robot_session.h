@@ -40,6 +40,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "crunch/core/result.h"
@@ -64,6 +65,10 @@ struct RobotSessionOptions {
   Vec2 area_lo{0.0, 0.0};  // the region it maps (the negative-evidence grid's extent)
   Vec2 area_hi{6.0, 6.0};
   bool checksum_includes_header = true;  // the Create 1's checksum quirk (io/create_oi.h)
+  // The area's edges are the room's walls: the mapper is told no leg stands beyond them
+  // (MappingOptions::room; mapping.room itself is ignored: the area is the room). Recordings
+  // from before it was recorded: false.
+  bool room_bounds = true;
 
   // The sensing chain's options (SensingChainOptions::validate: kWhiskers mounts,
   // pipeline.validate() prefixed "pipeline: "); mapping.validate() (prefixed "mapping: "); a
@@ -145,9 +150,12 @@ class RobotSession {
   void closeWhisk();
   void syncCounts();
   void feedCreate(const io::Chunk& chunk);
+  void sweepBody(bool to_end);
   std::uint64_t settledUntil() const;
 
   static constexpr std::uint64_t kStreamPeriodNs = 15000000;  // the Create's stream, 15 ms
+  // The body's sweep (Mapper::addBodySweep) is added in steps of this many metres of odometry.
+  static constexpr double kSweepStep = 0.05;
 
   RobotSessionOptions options_;
   io::RecordingWriter* recorder_ = nullptr;
@@ -157,6 +165,7 @@ class RobotSession {
   std::array<std::int64_t, 64> packet_totals_{};  // one Create chunk's packets (feedCreate)
   std::array<Pose2, 64> packet_poses_{};
   Mapper mapper_;
+  std::optional<Vec2> swept_to_;  // where the body's sweep has reached
   std::vector<ContactReport> reports_;
   std::vector<FreeRay> free_rays_;
   RobotSessionCounts counts_;
