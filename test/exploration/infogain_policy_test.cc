@@ -128,24 +128,25 @@ TEST_CASE("Infogain: unswept space is worth the Poisson prior's bits, and the ch
   // most 45 cells of 5 cm (0.11 m^2, cells counted whole), so p = 1 - exp(-lambda A) < 0.11;
   // the outcome is no touch or a touch at one of A / (15 mm)^2 places: H_b(p) + p log2(A /
   // 0.015^2) bits at most.
-  InfogainOptions whisk_only;
-  whisk_only.path_sweep = false;
-  InfogainPolicy c(PolicyOptions{}, whisk_only);
-  Rng r3(1);
-  const Decision dc = c.next(s.state, r3);
-  REQUIRE(dc.goal);
-  const CandidateValue vw = c.value(s.state, *dc.goal);
-  CHECK(c.legDensity() < 1.0);
+  const Decision dc = da;
+  const CandidateValue vw = v;
+  CHECK(a.legDensity() < 1.0);
   CHECK(vw.unknown_bits > 0.05);
   CHECK(vw.unknown_bits < unknownOutcomeBits(1.0, 0.11, 0.015));
-  // With the drive counted, the same pose is worth the band its path sweeps besides: the
-  // unswept area grows by at most the body's width (plus a cell each side) along the travel
-  // and its disc at the goal, and the bits are the same formula's over the whole area.
-  const CandidateValue vp = a.value(s.state, *dc.goal);
+  // With the drive counted (path_sweep), the same pose is worth the band its path sweeps
+  // besides: the unswept area grows by at most the body's width (plus a cell each side) along
+  // the travel and its disc at the goal, and the bits are the same formula's over the whole
+  // area.
+  InfogainOptions with_path;
+  with_path.path_sweep = true;
+  InfogainPolicy c(PolicyOptions{}, with_path);
+  Rng r3(1);
+  REQUIRE(c.next(s.state, r3).goal);
+  const CandidateValue vp = c.value(s.state, *dc.goal);
   const double radius = kRobotRadius, cell = w.known.cell();
   CHECK(vp.unknown_m2 > vw.unknown_m2 + 0.5 * 2 * radius * (vp.travel_m / 1.5 - 0.3 - radius));
   CHECK(vp.unknown_m2 <= vw.unknown_m2 + (2 * radius + 2 * cell) * vp.travel_m + kPi * radius * radius);
-  CHECK(vp.unknown_bits == Approx(unknownOutcomeBits(a.legDensity(), vp.unknown_m2, 0.015)));
+  CHECK(vp.unknown_bits == Approx(unknownOutcomeBits(c.legDensity(), vp.unknown_m2, 0.015)));
   CHECK(vp.unknown_bits > vw.unknown_bits);
   CHECK(unknownOutcomeBits(1.0, 0.11, 0.015) ==
         Approx(binaryEntropyBits(1 - std::exp(-0.11)) +

@@ -86,16 +86,26 @@ TEST_CASE("ExploreLoop: a bump on an unknown leg is recorded and the path replan
   sim::KinematicBase base(*world, {.start = {0.5, 1.5, 0.0}});
   KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
   ListPolicy policy({{3.5, 1.5, 0.0}});
-  int whisks = 0;
+  std::vector<Pose2> whisked;
   ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
-                   ExploreLoop::Options{}, {.whisked = [&](const Pose2&) { ++whisks; }, .samples = {}, .bump_point = {}});
+                   ExploreLoop::Options{}, {.whisked = [&](const Pose2& p) { whisked.push_back(p); }, .samples = {}, .bump_point = {}});
   run(loop, base, 400.0);
   REQUIRE(loop.finished());
   CHECK(loop.report().bumps >= 1);
   REQUIRE_FALSE(loop.report().bump_points.empty());
-  CHECK((loop.report().bump_points[0] - Vec2(2.0, 1.5)).norm() < 0.06);  // on the leg's face
-  CHECK(known.at(loop.report().bump_points[0]) == KnownSpace::Cell::kOccupied);
-  CHECK(whisks == 1);
+  const Vec2 hit = loop.report().bump_points[0];
+  CHECK((hit - Vec2(2.0, 1.5)).norm() < 0.06);  // on the leg's face
+  CHECK(known.at(hit) == KnownSpace::Cell::kOccupied);
+  // Backed off straight (the hit was ahead), then whisked there, facing it; a bump at another
+  // place (5 cm or more from the first) gets its own whisk; then the goal's whisk.
+  INFO("bumps " << loop.report().bumps);
+  REQUIRE(whisked.size() >= 2);
+  CHECK(static_cast<int>(whisked.size()) <= 1 + loop.report().bumps);
+  CHECK(loop.report().whisks == static_cast<int>(whisked.size()));
+  CHECK((whisked.back().position() - Vec2(3.5, 1.5)).norm() < 0.05);
+  CHECK(std::abs(wrapPi(whisked[0].theta)) < 0.05);
+  CHECK((whisked[0].position() - hit).norm() > kRobotRadius + 0.04);
+  CHECK((whisked[0].position() - hit).norm() < kRobotRadius + 0.08);
   CHECK((base.odometry().position() - Vec2(3.5, 1.5)).norm() < 0.05);  // got there anyway
   CHECK(loop.report().stop_reason == "list done");
 }
@@ -133,4 +143,53 @@ TEST_CASE("ExploreLoop: a robot boxed in ends the run cleanly and says why", "[s
   CHECK(loop.report().stop_reason.find("boxed in") != std::string::npos);
   CHECK(loop.report().whisks == 0);
   CHECK(loop.report().travel_m == 0.0);
+}
+
+TEST_CASE("ExploreLoop: a leg grazed at the side: the robot turns to face the bump, backs away "
+          "from it and whisks it, once",
+          "[session]") {
+  // A leg whose face is 15 mm inside the body's path, beside the straight line to the goal.
+  TableSpec t;
+  const Vec2 leg{2.0, 1.5 + kRobotRadius + 0.5 * t.leg - 0.015};
+  t.pose = {leg.x() + 0.5 * (t.width - t.leg), leg.y() + 0.5 * (t.depth - t.leg), 0.0};
+  const Scene scene = room({t});
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {0.5, 1.5, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  ListPolicy policy({{3.5, 1.5, 0.0}});
+  std::vector<Pose2> whisked;
+  ExploreLoop loop(
+      base, known, policy, defaultWhiskerArray(), ModelParams{}, {}, ExploreLoop::Options{},
+      {.whisked = [&](const Pose2& p) { whisked.push_back(p); },
+       .samples = {},
+       // As --sim's bumper: the nearest point of any leg to the body.
+       .bump_point = [&](const Pose2& p) -> std::optional<Vec2> {
+         std::optional<Vec2> best;
+         double d = 1e9;
+         for (const OrientedRect& r : world->footprints()) {
+           const PerimeterPoint q = closestOnPerimeter(r, p.position());
+           if (q.distance < d) {
+             d = q.distance;
+             best = q.point;
+           }
+         }
+         return best;
+       }});
+  run(loop, base, 400.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason == "list done");
+  REQUIRE(loop.report().bumps >= 1);
+  const Vec2 hit = loop.report().bump_points[0];
+  INFO("hit " << hit.x() << ", " << hit.y());
+  const Vec2 rel = hit - Vec2(2.0, 1.5);
+  CHECK(std::abs(rel.x()) < 0.1);  // beside the body, not ahead of it
+  // The whisk after the bump faces the hit point from a body's radius plus the back-off.
+  REQUIRE(whisked.size() >= 2);
+  const Vec2 to_hit = hit - whisked[0].position();
+  CHECK(std::abs(wrapPi(std::atan2(to_hit.y(), to_hit.x()) - whisked[0].theta)) < 0.1);
+  CHECK(to_hit.norm() > kRobotRadius + 0.04);
+  // A side graze no longer repeats: at most one bump per place (the old back-off along the
+  // heading grazed the same leg again and again).
+  CHECK(loop.report().bumps <= 2);
+  CHECK((base.odometry().position() - Vec2(3.5, 1.5)).norm() < 0.05);
 }

@@ -1,5 +1,8 @@
 #include "crunch/session/explore_loop.h"
 
+#include <cstdio>
+#include <cstdlib>
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -100,6 +103,21 @@ bool ExploreLoop::budgetReached(std::string& why) const {
   return false;
 }
 
+Status ExploreLoop::afterBump() {
+  // A goal that keeps bumping (the bump point is only where the front of the body was; an
+  // object hit at the side stays unknown) is given up after max_bumps_per_goal.
+  if (goal_bumps_ >= options_.max_bumps_per_goal || !plan()) {
+    if (failGoal() >= options_.max_failed_goals) {
+      finish("boxed in: " + std::to_string(failed_) + " goals in a row could not be reached");
+      return okStatus();
+    }
+    phase_ = Phase::kDecide;
+    return okStatus();
+  }
+  phase_ = Phase::kFollow;
+  return okStatus();
+}
+
 bool ExploreLoop::newTouch(const Vec2& p) const {
   for (const Vec2& t : touches_) {
     if ((t - p).norm() < options_.touch_separation) return false;
@@ -184,10 +202,28 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
     ++report_.bumps;
     ++goal_bumps_;
     report_.bump_points.push_back(hit);
+    // The bumper says only that something is at the front; the whiskers can say where. Once
+    // backed off, a whisk in place sweeps the front (the four whiskers' sweeps join from -49
+    // to +49 degrees, reaching from 5 cm beyond the rim): its contacts mark the object where it
+    // is, and the planner goes round it instead of into it again. Once per place.
+    bump_whisk_ = std::none_of(touches_.begin(), touches_.end(), [&](const Vec2& t) {
+      return (t - hit).norm() < options_.touch_separation;
+    });
+    if (bump_whisk_) touches_.push_back(hit);
+    // Straight away from the hit, facing it: reversing at once when it is ahead (the Create's
+    // bumpers are at the front), else first turned in place to face it (the body is a disc): a
+    // body grazing a leg at its side would graze it again backing along its heading, and the
+    // whisk that follows must sweep where the hit was.
+    const Vec2 toward = hit - pose.position();
+    escape_heading_ = toward.norm() > 1e-9 ? std::atan2(toward.y(), toward.x()) : pose.theta;
+    if (std::abs(wrapPi(escape_heading_ - pose.theta)) < kPi / 6) escape_heading_ = pose.theta;
+    escape_sign_ = -1.0;
+    escape_turned_ = false;
     backoff_from_ = pose;
-    deadline_ = base_.now() + 3.0 * options_.backoff / options_.backoff_speed + 1.0;
+    deadline_ = base_.now() + 3.0 * options_.backoff / options_.backoff_speed + 1.0 +
+                3.0 * kPi / options_.turn_rate;
     phase_ = Phase::kBackOff;
-    return command(-options_.backoff_speed, 0.0);
+    return okStatus();
   }
 
   switch (phase_) {
@@ -271,6 +307,14 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
         return okStatus();
       }
       std::string why;
+      if (bump_whisk_) {  // the whisk after a bump: on as after any bump
+        bump_whisk_ = false;
+        if (budgetReached(why)) {
+          phase_ = Phase::kDecide;
+          return okStatus();
+        }
+        return afterBump();
+      }
       if (budgetReached(why) || !plan()) {
         phase_ = Phase::kDecide;
         return okStatus();
@@ -280,23 +324,27 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
     }
 
     case Phase::kBackOff: {
+      if (!escape_turned_) {
+        const double e = wrapPi(escape_heading_ - pose.theta);
+        if (std::abs(e) > options_.heading_tolerance && base_.now() <= deadline_) {
+          const double mag = std::clamp(kHeadingGain * std::abs(e), kMinTurn, options_.turn_rate);
+          return command(0.0, std::copysign(mag, e));
+        }
+        escape_turned_ = true;
+        backoff_from_ = pose;
+      }
       const bool done =
           (pose.position() - backoff_from_.position()).norm() >= options_.backoff ||
           base_.now() > deadline_;
-      if (!done) return command(-options_.backoff_speed, 0.0);
+      if (!done) return command(escape_sign_ * options_.backoff_speed, 0.0);
       if (auto st = command(0.0, 0.0); !st) return st;
-      // A goal that keeps bumping (the bump point is only where the front of the body was; an
-      // object hit at the side stays unknown) is given up after max_bumps_per_goal.
-      if (goal_bumps_ >= options_.max_bumps_per_goal || !plan()) {
-        if (failGoal() >= options_.max_failed_goals) {
-          finish("boxed in: " + std::to_string(failed_) + " goals in a row could not be reached");
-          return okStatus();
-        }
-        phase_ = Phase::kDecide;
-        return okStatus();
+      if (bump_whisk_) {
+        whisk_pose_ = pose;
+        phase_ = Phase::kTouchWhisk;
+        sent_ = false;  // BodyWhisk commands the base from here
+        return whisk_.startInPlace(+1);
       }
-      phase_ = Phase::kFollow;
-      return okStatus();
+      return afterBump();
     }
 
     case Phase::kDone:

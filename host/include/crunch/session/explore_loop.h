@@ -12,9 +12,12 @@
 //   -> decide again.
 // A bump (base.bumped()) while driving or turning: stop, record the bump point (Hooks::bump_point,
 // else the body's front on its heading, radius kRobotRadius) as occupied in the KnownSpace and in the report, back off
-// `backoff`, replan to the same goal (a new decision if it is now unreachable, or after
-// max_bumps_per_goal bumps on the way to it: the bumper says only that the front hit something,
-// so an object met at the side can bump again).
+// `backoff` straight away from the bump point, facing it (turned in place first unless it is
+// within 30 degrees of ahead, as the Create's front bumper's always is), and, if the bump point is touch_separation from every touch and bump acted on
+// before, whisk in place there (a touch whisk: the whiskers locate what the bumper only felt,
+// so the next plan goes round it); then replan to the same goal (a new decision if it is now
+// unreachable, or after max_bumps_per_goal bumps on the way to it: the bumper says only that
+// the front hit something, so an object met at the side can bump again).
 // A whisker touching while driving (update's contact mask): if the touch is at least
 // touch_separation from every occupied cell of the KnownSpace and every touch acted on before,
 // stop and whisk in place there (new evidence, reported like any whisk), then replan to the goal;
@@ -109,6 +112,7 @@ class ExploreLoop {
   int failGoal();  // counts the current goal as failed; returns the failures in a row
   Status command(double v, double omega);
   bool newTouch(const Vec2& p) const;
+  Status afterBump();  // backed off (and whisked): replan to the goal, or give it up
   bool budgetReached(std::string& why) const;
   void track(const Pose2& pose);
 
@@ -138,6 +142,9 @@ class ExploreLoop {
   std::vector<Vec2> touches_;
   std::vector<MapSample> samples_;
   bool sent_ = false;
+  bool bump_whisk_ = false;  // the bump was at a new place: whisk there once backed off
+  double escape_heading_ = 0.0, escape_sign_ = -1.0;  // the back-off: turn to, then move
+  bool escape_turned_ = false;
   double sent_v_ = 0.0, sent_omega_ = 0.0;
 };
 
