@@ -188,3 +188,56 @@ TEST_CASE("Infogain: the region's edges are known walls, draws disagreeing only 
   InfogainPolicy p2(PolicyOptions{});
   CHECK(p2.value(t.state, {0.75, 1.25, -kPi / 2}).sample_bits == Approx(1.0));
 }
+
+TEST_CASE("Infogain: the branch and bound is exact: no candidate, pruned or cut off, is worth "
+          "more than its choice",
+          "[exploration][infogain]") {
+  // Half-swept room with Fig. 7's rival tables: candidates are worth draw bits near the
+  // disputed legs and unswept-space bits elsewhere, with and without the path's sweep.
+  for (const bool path : {false, true}) {
+    INFO("path_sweep " << path);
+    World w;
+    w.known.markBody({1.0, 1.0}, 0.9);
+    w.known.markContact({1.0, 1.5});
+    w.known.markContact({1.75, 1.5});
+    for (int i = 0; i < 16; ++i) {
+      MapSample s;
+      s.tables.push_back(i % 2 ? kNorth : kSouth);
+      w.samples.push_back(s);
+    }
+    State s(w, {0.8, 0.8, 0.0});
+    InfogainOptions io;
+    io.path_sweep = path;
+    InfogainPolicy policy(PolicyOptions{}, io);
+    Rng rng(1);
+    const Decision d = policy.next(s.state, rng);
+    REQUIRE(d.goal);
+    // Every candidate next() generated, scored in full by value() (which never prunes).
+    InfogainPolicy judge(PolicyOptions{}, io);
+    judge.next(s.state, rng);  // the same state prepared, the same candidates
+    int scored = 0;
+    for (const CandidateValue& c : policy.lastCandidates()) {
+      const CandidateValue full = judge.value(s.state, c.pose);
+      if (full.score > d.score * (1 + 1e-9) + 1e-12)
+        FAIL_CHECK("pruned (" << c.pose.x << ", " << c.pose.y << ", " << c.pose.theta << ") worth "
+                              << full.score << " > chosen " << d.score);
+      ++scored;
+    }
+    // And the whole lattice, including what the global bound cut off unseen.
+    const PolicyOptions po;
+    for (double y = 0.5 * po.candidate_spacing; y < 3.0; y += po.candidate_spacing)
+      for (double x = 0.5 * po.candidate_spacing; x < 3.0; x += po.candidate_spacing) {
+        if (s.state.costmap.blocked(Vec2(x, y))) continue;
+        for (int h = 0; h < po.candidate_headings; ++h) {
+          const Pose2 c{x, y, wrapPi(2.0 * kPi * h / po.candidate_headings)};
+          const CandidateValue full = judge.value(s.state, c);
+          if (full.score > d.score * (1 + 1e-9) + 1e-12)
+            FAIL_CHECK("lattice (" << x << ", " << y << ", " << c.theta << ") worth " << full.score
+                                   << " > chosen " << d.score);
+          ++scored;
+        }
+      }
+    CHECK(scored > 1000);
+    CHECK(d.score == Approx(judge.value(s.state, *d.goal).score));
+  }
+}

@@ -86,10 +86,25 @@ void InfogainPolicy::prepare(const ExploreState& state) {
     rmin = std::min(rmin, m.base.norm());
     rmax = std::max(rmax, (m.base + m.length * m.direction()).norm());
   }
-  // Every cell a whisk's rays can count lies within a cell of the annulus.
-  const double c = k.cell();
-  const double r0 = std::max(0.0, rmin - c), r1 = rmax + c;
-  ring_cells_max_ = kPi * (r1 * r1 - r0 * r0) / (c * c);
+  // Every cell a whisk's rays can count holds a ray sample inside one whisker's sector (its
+  // bearing +- the amplitude, its base to its tip), so the cell lies within a cell diagonal d of
+  // the union of the sectors: the cells are at most that grown union's area over a cell's,
+  // area + perimeter d + pi d^2 (Steiner's bound for the union of the merged angular spans
+  // between rmin and rmax; merging less only loosens it).
+  const double c = k.cell(), d = c * std::sqrt(2.0);
+  std::vector<std::pair<double, double>> spans;
+  for (const WhiskerMount& m : predictor_.mounts())
+    spans.push_back({m.bearing - io_.prediction.amplitude, m.bearing + io_.prediction.amplitude});
+  std::sort(spans.begin(), spans.end());
+  double area = 0.0, perimeter = 0.0;
+  for (size_t i = 0; i < spans.size();) {
+    double a0 = spans[i].first, a1 = spans[i].second;
+    for (++i; i < spans.size() && spans[i].first <= a1; ++i) a1 = std::max(a1, spans[i].second);
+    const double span = std::min(a1 - a0, 2.0 * kPi);
+    area += 0.5 * span * (rmax * rmax - rmin * rmin);
+    perimeter += 2.0 * (rmax - rmin) + span * (rmin + rmax);
+  }
+  ring_cells_max_ = (area + perimeter * d + kPi * d * d) / (c * c);
   sweepBand(state);
 }
 
@@ -278,7 +293,8 @@ double InfogainPolicy::positionBound(double cell, int band) const {
       if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
   }
   // unknownOutcomeBits grows with the area.
-  const double area = static_cast<double>(ray_cells_.size() + static_cast<size_t>(band)) * cell * cell;
+  const double ring = std::min(static_cast<double>(ray_cells_.size()), ring_cells_max_);
+  const double area = (ring + band) * cell * cell;
   return h + unknownOutcomeBits(lambda_, area, io_.prediction.resolution) + 1e-12;
 }
 

@@ -138,7 +138,7 @@ class InfogainPolicy final : public ExplorePolicy {
   int path_stamp_now_ = 0;
   std::vector<int> disc_dx_, disc_dy_;  // the body's disc, cell offsets
   std::vector<int> edge_begin_, edge_dx_, edge_dy_;  // per step direction: its leading edge
-  double ring_cells_max_ = 0.0;     // cells of the whole whisker annulus (a bound)
+  double ring_cells_max_ = 0.0;     // cells one whisk can count at most (a bound)
   double lambda_ = 1.0;
   std::vector<Pose2> whisked_;
   std::vector<CandidateValue> values_;
