@@ -81,9 +81,10 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
   const bool grid = eo.policy == exploration::ExplorePolicyKind::kGrid;
   const auto [lo, hi] = mapperRegion(scene, mounts, grid);
   // The known region's edges are the room's walls (the policies and the planner treat them so):
-  // the blackboard knows no leg stands beyond them.
+  // a driven robot's blackboard knows no leg stands beyond them. Teleported runs (the paper's
+  // idealisation) stay the paper's: neither the room nor the body's sweep.
   MappingOptions room_opt = mopt;
-  room_opt.room = std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(width, depth)};
+  if (!eo.teleport) room_opt.room = std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(width, depth)};
   Mapper mapper(mounts, lo, hi, room_opt);
   exploration::KnownSpace known(Vec2(0, 0), Vec2(width, depth), eo.cell);
   auto policy = exploration::makePolicy(eo.policy, eo.policy_options);

@@ -1,8 +1,5 @@
 #include "crunch/session/explore_loop.h"
 
-#include <cstdio>
-#include <cstdlib>
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -217,13 +214,12 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
     const Vec2 toward = hit - pose.position();
     escape_heading_ = toward.norm() > 1e-9 ? std::atan2(toward.y(), toward.x()) : pose.theta;
     if (std::abs(wrapPi(escape_heading_ - pose.theta)) < kPi / 6) escape_heading_ = pose.theta;
-    escape_sign_ = -1.0;
     escape_turned_ = false;
     backoff_from_ = pose;
     deadline_ = base_.now() + 3.0 * options_.backoff / options_.backoff_speed + 1.0 +
                 3.0 * kPi / options_.turn_rate;
     phase_ = Phase::kBackOff;
-    return okStatus();
+    return command(0.0, 0.0);
   }
 
   switch (phase_) {
@@ -336,7 +332,7 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
       const bool done =
           (pose.position() - backoff_from_.position()).norm() >= options_.backoff ||
           base_.now() > deadline_;
-      if (!done) return command(escape_sign_ * options_.backoff_speed, 0.0);
+      if (!done) return command(-options_.backoff_speed, 0.0);
       if (auto st = command(0.0, 0.0); !st) return st;
       if (bump_whisk_) {
         whisk_pose_ = pose;

@@ -143,7 +143,7 @@ class ExploreLoop {
   std::vector<MapSample> samples_;
   bool sent_ = false;
   bool bump_whisk_ = false;  // the bump was at a new place: whisk there once backed off
-  double escape_heading_ = 0.0, escape_sign_ = -1.0;  // the back-off: turn to, then move
+  double escape_heading_ = 0.0;  // the back-off: face this heading, then reverse
   bool escape_turned_ = false;
   double sent_v_ = 0.0, sent_omega_ = 0.0;
 };
