@@ -206,16 +206,7 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
         // only; docs/EXPLORATION.md).
         .bump_point = [&](const Pose2& pose) -> std::optional<Vec2> {
           auto lock = lockWorld(world_mutex);
-          std::optional<Vec2> best;
-          double best_d = std::numeric_limits<double>::infinity();
-          for (const OrientedRect& r : scene.world->footprints()) {
-            const PerimeterPoint q = closestOnPerimeter(r, pose.position());
-            if (q.distance < best_d) {
-              best_d = q.distance;
-              best = q.point;
-            }
-          }
-          return best;
+          return scene.world->nearestSurfacePoint(pose.position());
         }};
     session::ExploreLoop loop(base, known, *policy, mounts, mopt.model, scene.poses, lo_opts,
                               std::move(hooks));

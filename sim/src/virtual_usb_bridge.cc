@@ -71,6 +71,19 @@ struct DataUnref {
 };
 using DataRef = std::unique_ptr<UMockdevIoctlData, DataUnref>;
 
+// `len` bytes at `offset` of `parent`, resolved from the client's memory; on failure the ioctl is
+// completed with EFAULT and null returned (the caller then only returns).
+DataRef resolveOrFault(UMockdevIoctlClient* client, UMockdevIoctlData* parent, gsize offset,
+                       gsize len) {
+  GError* err = nullptr;
+  DataRef d(umockdev_ioctl_data_resolve(parent, offset, len, &err));
+  if (d == nullptr) {
+    if (err != nullptr) g_error_free(err);
+    umockdev_ioctl_client_complete(client, -1, EFAULT);
+  }
+  return d;
+}
+
 struct VirtualUsbBridge::Impl {
   // A URB the client submitted: the resolved copy of its usbdevfs_urb and of its buffer.
   struct Urb {
@@ -192,13 +205,8 @@ struct VirtualUsbBridge::Impl {
 
   // Hands a completed URB back through the REAPURB argument (a pointer to the client's pointer).
   bool reap(UMockdevIoctlClient* client, UMockdevIoctlData* arg, std::deque<Urb>::iterator it) {
-    GError* err = nullptr;
-    const DataRef ptr(umockdev_ioctl_data_resolve(arg, 0, sizeof(void*), &err));
-    if (ptr == nullptr) {
-      if (err != nullptr) g_error_free(err);
-      umockdev_ioctl_client_complete(client, -1, EFAULT);
-      return true;
-    }
+    const DataRef ptr = resolveOrFault(client, arg, 0, sizeof(void*));
+    if (ptr == nullptr) return true;
     umockdev_ioctl_data_set_ptr(ptr.get(), 0, it->urb);
     release(*it);  // the argument now holds the URB data until the reply is flushed
     urbs.erase(it);
@@ -214,7 +222,6 @@ struct VirtualUsbBridge::Impl {
     // A client of an earlier plug-in, or any client while unplugged, talks to a gone device.
     const bool present =
         is_plugged && devnode == umockdev_ioctl_client_get_devnode(client);
-    GError* err = nullptr;
 
     switch (request) {
       case USBDEVFS_REAPURB:
@@ -248,12 +255,8 @@ struct VirtualUsbBridge::Impl {
           umockdev_ioctl_client_complete(client, -1, ENODEV);
           return true;
         }
-        DataRef urb_data(umockdev_ioctl_data_resolve(arg, 0, sizeof(usbdevfs_urb), &err));
-        if (urb_data == nullptr) {
-          if (err != nullptr) g_error_free(err);
-          umockdev_ioctl_client_complete(client, -1, EFAULT);
-          return true;
-        }
+        DataRef urb_data = resolveOrFault(client, arg, 0, sizeof(usbdevfs_urb));
+        if (urb_data == nullptr) return true;
         auto* urb = reinterpret_cast<usbdevfs_urb*>(urb_data->data);
         if (urb->type != USBDEVFS_URB_TYPE_BULK || urb->endpoint != opt.endpoint ||
             urb->buffer_length <= 0) {
@@ -263,14 +266,9 @@ struct VirtualUsbBridge::Impl {
           return true;
         }
         // The buffer lives as long as the URB data, which holds it as its child.
-        const DataRef buf(umockdev_ioctl_data_resolve(
-            urb_data.get(), offsetof(usbdevfs_urb, buffer), static_cast<gsize>(urb->buffer_length),
-            &err));
-        if (buf == nullptr) {
-          if (err != nullptr) g_error_free(err);
-          umockdev_ioctl_client_complete(client, -1, EFAULT);
-          return true;
-        }
+        const DataRef buf = resolveOrFault(client, urb_data.get(), offsetof(usbdevfs_urb, buffer),
+                                           static_cast<gsize>(urb->buffer_length));
+        if (buf == nullptr) return true;
         Urb u;
         u.client = static_cast<UMockdevIoctlClient*>(g_object_ref(client));
         u.urb = urb_data.release();  // the reference resolve gave, dropped by release()
@@ -300,15 +298,11 @@ struct VirtualUsbBridge::Impl {
           umockdev_ioctl_client_complete(client, -1, ENODEV);
           return true;
         }
-        const DataRef d(umockdev_ioctl_data_resolve(arg, 0, sizeof(guint32), &err));
-        if (d == nullptr) {
-          if (err != nullptr) g_error_free(err);
-          umockdev_ioctl_client_complete(client, -1, EFAULT);
-          return true;
-        }
+        const DataRef d = resolveOrFault(client, arg, 0, sizeof(guint32));
+        if (d == nullptr) return true;
         const guint32 caps = USBDEVFS_CAP_BULK_CONTINUATION | USBDEVFS_CAP_NO_PACKET_SIZE_LIM |
                              USBDEVFS_CAP_REAP_AFTER_DISCONNECT;
-        std::memcpy(d.get()->data, &caps, sizeof caps);
+        std::memcpy(d->data, &caps, sizeof caps);
         umockdev_ioctl_client_complete(client, 0, 0);
         return true;
       }
@@ -319,14 +313,10 @@ struct VirtualUsbBridge::Impl {
           umockdev_ioctl_client_complete(client, -1, ENODEV);
           return true;
         }
-        const DataRef d(umockdev_ioctl_data_resolve(arg, 0, sizeof(guint32), &err));
-        if (d == nullptr) {
-          if (err != nullptr) g_error_free(err);
-          umockdev_ioctl_client_complete(client, -1, EFAULT);
-          return true;
-        }
+        const DataRef d = resolveOrFault(client, arg, 0, sizeof(guint32));
+        if (d == nullptr) return true;
         guint32 itf = 0;
-        std::memcpy(&itf, d.get()->data, sizeof itf);
+        std::memcpy(&itf, d->data, sizeof itf);
         if (itf != 0) {
           umockdev_ioctl_client_complete(client, -1, request == USBDEVFS_CLAIMINTERFACE ? ENOENT
                                                                                     : EINVAL);

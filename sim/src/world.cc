@@ -166,6 +166,19 @@ bool World::bodyCollides(const Pose2& pose) const {
   return hit;
 }
 
+std::optional<Vec2> World::nearestSurfacePoint(const Vec2& p) const {
+  std::optional<Vec2> best;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (const OrientedRect& r : footprints_) {
+    const PerimeterPoint q = closestOnPerimeter(r, p);
+    if (q.distance < best_d) {
+      best_d = q.distance;
+      best = q.point;
+    }
+  }
+  return best;
+}
+
 std::vector<Pose2> World::reachablePoses(const std::vector<Pose2>& candidates, int* skipped) const {
   std::vector<Pose2> kept;
   kept.reserve(candidates.size());

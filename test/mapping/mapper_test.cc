@@ -152,6 +152,13 @@ Map plainRun(const std::vector<WhiskerMount>& mounts, const Script& script,
   return m.finish();
 }
 
+// The fused tables within 5 cm of `at`.
+int tablesNear(const Map& map, const Pose2& at) {
+  int n = 0;
+  for (const MapTable& t : map.tables) n += std::hypot(t.pose.x - at.x, t.pose.y - at.y) < 0.05;
+  return n;
+}
+
 }  // namespace
 
 TEST_CASE("Mapper: pose by pose gives exactly runMapping's map", "[mapping][mapper]") {
@@ -612,29 +619,24 @@ TEST_CASE("Mapper::addBodySweep: a body that drove through a leg's place rules t
   const double hy = 0.5 * (kStandardTableDepth - kStandardLegSide);
   const Vec2 leg = truth.toWorld(Vec2{hx, hy});
   const Vec2 along = Vec2{std::cos(truth.theta), std::sin(truth.theta)};
-  auto run = [&](MappingOptions o, bool sweep) {
+  // The script with the drive half-way through it.
+  auto sweptRun = [&](const MappingOptions& o) {
     Mapper m(mounts, lo, hi, o);
     for (std::size_t i = 0; i < script.poses.size(); ++i) {
-      if (sweep && i == script.poses.size() / 2) m.addBodySweep(leg - 0.3 * along, leg + 0.3 * along);
+      if (i == script.poses.size() / 2) m.addBodySweep(leg - 0.3 * along, leg + 0.3 * along);
       m.addPose(script.poses[i], script.reports[i], script.rays[i]);
     }
     return m.finish();
   };
-  auto nearTruth = [&](const Map& map) {
-    int n = 0;
-    for (const MapTable& t : map.tables)
-      n += std::hypot(t.pose.x - truth.x, t.pose.y - truth.y) < 0.05;
-    return n;
-  };
   for (const std::uint64_t seed : {std::uint64_t{1}, std::uint64_t{2}}) {
     INFO("seed " << seed);
     const MappingOptions o = options(seed, 4);
-    const Map plain = run(o, false);
-    CHECK(nearTruth(plain) == 1);
-    CHECK(nearTruth(run(o, true)) == 0);
+    const Map plain = plainRun(mounts, script, o);
+    CHECK(tablesNear(plain, truth) == 1);
+    CHECK(tablesNear(sweptRun(o), truth) == 0);
     MappingOptions off = o;
     off.body_sweep = false;
-    requireSameMap(run(off, true), plain);
+    requireSameMap(sweptRun(off), plain);
   }
 }
 
@@ -644,26 +646,14 @@ TEST_CASE("Mapper: a room bound rules out a table standing beyond the room's wal
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
   const Script script = tableScript(mounts);
   const Pose2 truth{1.5, 1.2, 0.3};
-  auto [lo, hi] = reach(script.poses, mounts);
-  auto nearTruth = [&](const Map& map) {
-    int n = 0;
-    for (const MapTable& t : map.tables)
-      n += std::hypot(t.pose.x - truth.x, t.pose.y - truth.y) < 0.05;
-    return n;
-  };
-  auto run = [&](const MappingOptions& o) {
-    Mapper m(mounts, lo, hi, o);
-    for (std::size_t i = 0; i < script.poses.size(); ++i)
-      m.addPose(script.poses[i], script.reports[i], script.rays[i]);
-    return m.finish();
-  };
+  const auto [lo, hi] = reach(script.poses, mounts);
   MappingOptions o = options(1, 4);
   // A room holding the whole table keeps it; one whose wall cuts through the table's +x legs
   // (x = truth.x: the legs beyond it cannot be) does not.
   o.room = std::pair<Vec2, Vec2>{lo, hi};
-  CHECK(nearTruth(run(o)) == 1);
+  CHECK(tablesNear(plainRun(mounts, script, o), truth) == 1);
   o.room = std::pair<Vec2, Vec2>{lo, Vec2(truth.x, hi.y())};
-  CHECK(nearTruth(run(o)) == 0);
+  CHECK(tablesNear(plainRun(mounts, script, o), truth) == 0);
   o.room = std::pair<Vec2, Vec2>{Vec2(1, 1), Vec2(1, 2)};
   CHECK_FALSE(o.validate());
   CHECK(o.validate().error().message.find("room") != std::string::npos);

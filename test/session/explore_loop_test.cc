@@ -163,18 +163,7 @@ TEST_CASE("ExploreLoop: a leg grazed at the side: the robot turns to face the bu
       {.whisked = [&](const Pose2& p) { whisked.push_back(p); },
        .samples = {},
        // As --sim's bumper: the nearest point of any leg to the body.
-       .bump_point = [&](const Pose2& p) -> std::optional<Vec2> {
-         std::optional<Vec2> best;
-         double d = 1e9;
-         for (const OrientedRect& r : world->footprints()) {
-           const PerimeterPoint q = closestOnPerimeter(r, p.position());
-           if (q.distance < d) {
-             d = q.distance;
-             best = q.point;
-           }
-         }
-         return best;
-       }});
+       .bump_point = [&](const Pose2& p) { return world->nearestSurfacePoint(p.position()); }});
   run(loop, base, 400.0);
   REQUIRE(loop.finished());
   CHECK(loop.report().stop_reason == "list done");

@@ -163,33 +163,30 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     REQUIRE(got);
     CHECK(got.value().mapping.chain_fusion == ChainFusion::kVote);
   }
-  SECTION("body_sweep round-trips; a recording from before it was recorded maps without it") {
-    CHECK(json::parse(good)["settings"]["mapping"]["body_sweep"] == true);
-    json meta = json::parse(good);
-    meta["settings"]["mapping"]["body_sweep"] = false;
-    auto off = session::sessionFromMetadata(meta.dump(), "recording test.crec");
-    REQUIRE(off);
-    CHECK_FALSE(off.value().mapping.body_sweep);
-    meta["settings"]["mapping"].erase("body_sweep");
-    auto old = session::sessionFromMetadata(meta.dump(), "recording test.crec");
-    REQUIRE(old);
-    CHECK_FALSE(old.value().mapping.body_sweep);
-    meta["settings"]["mapping"]["body_sweep"] = 1;
-    CHECK(errorOf(meta.dump()).find("settings.mapping.body_sweep") != std::string::npos);
-  }
-  SECTION("room_bounds round-trips; a recording from before it was recorded has none") {
-    CHECK(json::parse(good)["settings"]["mapping"]["room_bounds"] == true);
-    json meta = json::parse(good);
-    meta["settings"]["mapping"]["room_bounds"] = false;
-    auto off = session::sessionFromMetadata(meta.dump(), "recording test.crec");
-    REQUIRE(off);
-    CHECK_FALSE(off.value().room_bounds);
-    meta["settings"]["mapping"].erase("room_bounds");
-    auto old = session::sessionFromMetadata(meta.dump(), "recording test.crec");
-    REQUIRE(old);
-    CHECK_FALSE(old.value().room_bounds);
-    meta["settings"]["mapping"]["room_bounds"] = "yes";
-    CHECK(errorOf(meta.dump()).find("settings.mapping.room_bounds") != std::string::npos);
+  SECTION("body_sweep and room_bounds round-trip; a recording from before them has neither") {
+    struct Flag {
+      const char* key;
+      bool (*get)(const session::RobotSessionOptions&);
+      json bad;  // not a boolean
+    };
+    const Flag flags[] = {
+        {"body_sweep", [](const session::RobotSessionOptions& o) { return o.mapping.body_sweep; }, 1},
+        {"room_bounds", [](const session::RobotSessionOptions& o) { return o.room_bounds; }, "yes"}};
+    for (const Flag& f : flags) {
+      INFO(f.key);
+      CHECK(json::parse(good)["settings"]["mapping"][f.key] == true);
+      json meta = json::parse(good);
+      meta["settings"]["mapping"][f.key] = false;
+      auto off = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+      REQUIRE(off);
+      CHECK_FALSE(f.get(off.value()));
+      meta["settings"]["mapping"].erase(f.key);
+      auto old = session::sessionFromMetadata(meta.dump(), "recording test.crec");
+      REQUIRE(old);
+      CHECK_FALSE(f.get(old.value()));
+      meta["settings"]["mapping"][f.key] = f.bad;
+      CHECK(errorOf(meta.dump()).find(std::string("settings.mapping.") + f.key) != std::string::npos);
+    }
   }
   SECTION("a recording from before marginal_steps and acceptance were recorded") {
     json meta = json::parse(good);

@@ -354,6 +354,17 @@ TEST_CASE("World: the nearest of two legs wins", "[sim]") {
   CHECK(between->distance == Approx(0.35).margin(kGeomTol));
 }
 
+TEST_CASE("World: the nearest surface point is on the nearest leg's outline", "[sim]") {
+  // Leg 0 (+x+y) of a table at (2, 2) spans x in [2.35, 2.40], y in [2.20, 2.25].
+  const auto world = World::build(makeScene({makeTable(2.0, 2.0, 0.0)}));
+  const auto east = world->nearestSurfacePoint({2.5, 2.225});
+  REQUIRE(east);
+  CHECK(east->isApprox(Vec2(2.40, 2.225), kGeomTol));
+  const auto corner = world->nearestSurfacePoint({2.45, 2.30});
+  REQUIRE(corner);
+  CHECK(corner->isApprox(Vec2(2.40, 2.25), kGeomTol));
+}
+
 TEST_CASE("World: builds only walls and legs", "[sim]") {
   const auto world = World::build(
       makeScene({makeTable(1.0, 1.0, 0.0), makeTable(3.0, 3.0, 0.5)}, {{{1.0, 2.0}, {2.0, 2.0}}}));

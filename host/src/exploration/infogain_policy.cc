@@ -81,11 +81,13 @@ void InfogainPolicy::prepare(const ExploreState& state) {
   stamp_now_ = 0;
   path_stamp_.assign(static_cast<size_t>(k.nx() * k.ny()), 0);
   path_stamp_now_ = 0;
-  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
+  rmin_ = std::numeric_limits<double>::infinity();
+  rmax_ = 0.0;
   for (const WhiskerMount& m : predictor_.mounts()) {
-    rmin = std::min(rmin, m.base.norm());
-    rmax = std::max(rmax, (m.base + m.length * m.direction()).norm());
+    rmin_ = std::min(rmin_, m.base.norm());
+    rmax_ = std::max(rmax_, (m.base + m.length * m.direction()).norm());
   }
+  const double rmin = rmin_, rmax = rmax_;
   // Every cell a whisk's rays can count holds a ray sample inside one whisker's sector (its
   // bearing +- the amplitude, its base to its tip), so the cell lies within a cell diagonal d of
   // the union of the sectors: the cells are at most that grown union's area over a cell's,
@@ -172,17 +174,15 @@ int InfogainPolicy::bandAt(const ExploreState& state, const Vec2& p) const {
   return band_[static_cast<size_t>(iy * state.known.nx() + ix)];
 }
 
-void InfogainPolicy::stampPathEnd(const ExploreState& state, int cell) {
+void InfogainPolicy::stampPathEnd(const ExploreState& state, const Vec2& position) {
   ++path_stamp_now_;
-  if (!io_.path_sweep) return;
   const KnownSpace& k = state.known;
+  int cx, cy;
+  if (!io_.path_sweep || !k.index(position, cx, cy)) return;
   const int nx = k.nx(), ny = k.ny();
-  double reach = 0.0;
-  for (const WhiskerMount& m : predictor_.mounts())
-    reach = std::max(reach, (m.base + m.length * m.direction()).norm());
-  reach += state.costmap.options().robot_radius + k.cell();
+  const double reach = rmax_ + state.costmap.options().robot_radius + k.cell();
   double back = 0.0;
-  for (int j = cell; j >= 0 && back <= reach;) {
+  for (int j = cy * nx + cx; j >= 0 && back <= reach;) {
     const int x = j % nx, y = j / nx;
     for (size_t q = 0; q < disc_dx_.size(); ++q) {
       const int ix = x + disc_dx_[q], iy = y + disc_dy_[q];
@@ -303,11 +303,7 @@ void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
   // marched outward half a cell at a time from the rim to the tip and stopped by the first
   // occupied cell (a whisker stops there): the unknown cells each ray would sweep. The default
   // whiskers point radially outward from the rim, so a whisker turned to angle a sweeps ray a.
-  double rmin = std::numeric_limits<double>::infinity(), rmax = 0.0;
-  for (const WhiskerMount& m : predictor_.mounts()) {
-    rmin = std::min(rmin, m.base.norm());
-    rmax = std::max(rmax, (m.base + m.length * m.direction()).norm());
-  }
+  const double rmin = rmin_, rmax = rmax_;  // prepare()'s
   const double step = 0.5 * k.cell();
   n_rays_ = std::max(8, static_cast<int>(std::ceil(2.0 * kPi * rmax / step)));
   const int nr = std::max(1, static_cast<int>(std::ceil((rmax - rmin) / step)));
@@ -333,7 +329,7 @@ void InfogainPolicy::march(const KnownSpace& k, const Vec2& position) {
 }
 
 double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose, double* area_m2) {
-  // Requires march(state.known, pose.position()) and stampPathEnd(its cell).
+  // Requires march(state.known, pose.position()) and stampPathEnd(state, pose.position()).
   const double cell = state.known.cell();
   ++stamp_now_;
   int unknown = 0;
@@ -371,9 +367,7 @@ CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pos
   if (!std::isfinite(v.travel_m) || whiskedBefore(pose)) return v;
   gather(pose.position());
   march(state.known, pose.position());
-  int ix, iy;
-  state.known.index(pose.position(), ix, iy);
-  stampPathEnd(state, iy * state.known.nx() + ix);
+  stampPathEnd(state, pose.position());
   v.sample_bits = sampleBits(pose);
   v.unknown_bits = unknownBits(state, pose, &v.unknown_m2);
   v.score = (v.sample_bits + v.unknown_bits) / (v.travel_m + io_.whisk_cost_m);
@@ -456,9 +450,7 @@ Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
       if (!(c.position() == gathered)) {  // the lattice's headings share a position
         gather(c.position());
         march(state.known, c.position());
-        int ix, iy;
-        state.known.index(c.position(), ix, iy);
-        stampPathEnd(state, iy * state.known.nx() + ix);
+        stampPathEnd(state, c.position());
         gathered = c.position();
         position_bound = positionBound(state.known.cell(), band);
       }

@@ -1,8 +1,7 @@
 #include "crunch/mapping/mapping_options.h"
 
-#include <cmath>
-
 #include <algorithm>
+#include <cmath>
 
 #include "crunch/core/range_check.h"
 

@@ -92,6 +92,10 @@ class World {
   // The footprint of every box built (walls first, then legs), for tests and drawing.
   const std::vector<OrientedRect>& footprints() const { return footprints_; }
 
+  // The point of any wall's or leg's outline nearest to p (a bumper that knows where it was
+  // pressed); nullopt in a world with nothing built.
+  std::optional<Vec2> nearestSurfacePoint(const Vec2& p) const;
+
   // The ODE space holding the walls and legs (static geoms: no bodies, no geom data), for a
   // dynamics simulation that collides its own geoms against them (WhiskeredRobot). Callers may
   // collide against it but must not add, remove, move or destroy its geoms.

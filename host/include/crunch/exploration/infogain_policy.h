@@ -103,7 +103,7 @@ class InfogainPolicy final : public ExplorePolicy {
   void gather(const Vec2& position);
   double sampleBits(const Pose2& pose);
   // The unknown cells each ray from `position` would sweep; unknownBits(pose) needs
-  // march(known, pose.position()) first.
+  // march(known, pose.position()) first. Both need prepare() (the whiskers' radii).
   void march(const KnownSpace& known, const Vec2& position);
   // An upper bound on any heading's bits at the gathered and marched position, whose path
   // sweeps `band` unknown cells.
@@ -111,9 +111,9 @@ class InfogainPolicy final : public ExplorePolicy {
   double unknownBits(const ExploreState& state, const Pose2& pose, double* area_m2 = nullptr);
   // band_: unknown cells swept by the body along the shortest-path tree (path_sweep).
   void sweepBand(const ExploreState& state);
-  // Stamps the body's discs of the path's last cells before `cell`, as far back as a whisk at
-  // `cell` can reach (unknownBits then skips them).
-  void stampPathEnd(const ExploreState& state, int cell);
+  // Stamps the body's discs of the path's last cells before `position`, as far back as a whisk
+  // there can reach (unknownBits then skips them).
+  void stampPathEnd(const ExploreState& state, const Vec2& position);
   int bandAt(const ExploreState& state, const Vec2& p) const;
   bool whiskedBefore(const Pose2& pose) const;
 
@@ -139,6 +139,7 @@ class InfogainPolicy final : public ExplorePolicy {
   std::vector<int> disc_dx_, disc_dy_;  // the body's disc, cell offsets
   std::vector<int> edge_begin_, edge_dx_, edge_dy_;  // per step direction: its leading edge
   double ring_cells_max_ = 0.0;     // cells one whisk can count at most (a bound)
+  double rmin_ = 0.0, rmax_ = 0.0;  // the whiskers' bases and tips from the centre (prepare)
   double lambda_ = 1.0;
   std::vector<Pose2> whisked_;
   std::vector<CandidateValue> values_;

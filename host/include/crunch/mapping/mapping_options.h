@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <functional>
 #include <optional>
-#include <utility>
 #include <string>
+#include <utility>
 
 #include "crunch/blackboard/blackboard.h"
 #include "crunch/blackboard/params.h"
