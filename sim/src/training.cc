@@ -63,6 +63,7 @@ class Collector {
                                               std::uint64_t seed) {
     WhiskerRig::Options ropt = options_.rig;
     ropt.seed = seed;
+    ropt.negative_evidence = false;  // episodes only; no whisk ever ends on the chain
     auto rig = WhiskerRig::create(world, defaultWhiskerArray(), start, ropt);
     if (!rig) return Error{"training rig: " + rig.error().message};
     simulated_ += rig.value()->robot().now();

@@ -28,6 +28,7 @@ Result<std::unique_ptr<WhiskerRig>> WhiskerRig::create(const World& world,
   chain_options.pipeline = options.pipeline;
   chain_options.mounts = mounts;
   chain_options.start = start;
+  chain_options.negative_evidence = options.negative_evidence;
   auto chain = session::SensingChain::create(chain_options);
   if (!chain) return Error{"whisker rig: " + chain.error().message};
   auto robot = WhiskeredRobot::create(world, std::move(mounts), options.robot);

@@ -185,6 +185,7 @@ int main(int argc, char** argv) {
   // contact threshold).
   sim::WhiskerRig::Options rig_options = sim::physicsRigOptions(seed);
   rig_options.robot.max_wheel_acceleration = wheel_acceleration;
+  rig_options.negative_evidence = false;  // the rig only senses; the host whisks
   auto rig = sim::WhiskerRig::create(*world, defaultWhiskerArray(), start_pose, rig_options);
   if (!rig) {
     std::cerr << "crunch-virtual-robot: " << rig.error().message << "\n";

@@ -223,6 +223,25 @@ TEST_CASE("SensingChain: free rays every kFreeEvery samples, at the pose of each
   CHECK(rays.empty());
 }
 
+TEST_CASE("SensingChain: with negative evidence off it keeps no samples and gives no free rays",
+          "[session]") {
+  SensingChainOptions options = chainOptions();
+  options.negative_evidence = false;
+  auto chain = SensingChain::create(options);
+  REQUIRE(chain);
+  SensingChain& c = *chain.value();
+  constexpr std::uint32_t kTicks = 40 * WhiskEvidence::kFreeEvery;
+  for (std::uint32_t t = 0; t < kTicks; ++t) c.feed(tickBytes(t), poseOfTick(t));
+  REQUIRE(c.calibrated());
+  REQUIRE(c.contactMask() == 0);
+  std::vector<ContactReport> reports;
+  std::vector<FreeRay> rays;
+  c.endWhisk(reports, rays);
+  CHECK(rays.empty());
+  CHECK(reports.empty());
+  CHECK(c.counts().samples == kTicks);  // it still senses every sample
+}
+
 TEST_CASE("SensingChain: the simulator's whisk at a leg is reported within a whisk only",
           "[session]") {
   const Scene scene = oneTable();

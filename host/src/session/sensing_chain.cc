@@ -36,7 +36,8 @@ SensingChain::SensingChain(const SensingChainOptions& options, signal::SignalPip
             signal::ContactDetector(options.pipeline.detector),
             signal::ContactDetector(options.pipeline.detector),
             signal::ContactDetector(options.pipeline.detector)},
-      free_pose_(options.start) {
+      free_pose_(options.start),
+      negative_evidence_(options.negative_evidence) {
   static_assert(signal::kWhiskers == 4, "live_ is initialised for four whiskers");
   evidence_.begin();
 }
@@ -104,7 +105,7 @@ const signal::ContactEpisode* SensingChain::onSample(const signal::SampleFrame& 
   if (ep != nullptr) takeEpisode(*ep);
   // Negative evidence: one sample of pose and contacts every kFreeEvery pipeline samples.
   if (index % WhiskEvidence::kFreeEvery == 0) {
-    if (index > 0) evidence_.sample(free_pose_, free_mask_);
+    if (index > 0 && negative_evidence_) evidence_.sample(free_pose_, free_mask_);
     free_pose_ = pose;
     free_mask_ = 0;
   }

@@ -24,8 +24,8 @@
 // must outlive it. Thread-safety: none (ODE and the host HAL are single-threaded).
 // Allocation: step() allocates nothing after warm-up (the chain's pose history is allocated at
 // create()), except that the chain's negative-evidence samples (32 bytes per 60 ms) grow until a
-// whisk ends on it: a user that never calls chain().endWhisk() (training, crunch-virtual-robot)
-// lets that buffer grow, amortised, about 1.9 MB per simulated hour.
+// whisk ends on it; a user that never calls chain().endWhisk() (training, crunch-virtual-robot)
+// sets Options::negative_evidence false, or that buffer grows by about 1.9 MB a simulated hour.
 #pragma once
 
 #include <array>
@@ -75,6 +75,9 @@ class WhiskerRig {
     HallSensorModel::Options hall;
     signal::PipelineOptions pipeline;
     std::uint64_t seed = 1;  // the Hall sensors' noise
+    // The chain's negative evidence (session::SensingChainOptions::negative_evidence): on for a
+    // user that whisks through chain() (the physics sensor), off for one that only senses.
+    bool negative_evidence = true;
     Status validate() const;
   };
 

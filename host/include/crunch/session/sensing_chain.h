@@ -64,6 +64,10 @@ struct SensingChainOptions {
   std::vector<WhiskerMount> mounts;  // the four horizontal whiskers, whisker w on board w
   WhiskerBeam beam;                  // their mechanics (contacts are located with it)
   Pose2 start;                       // the pose of every sample before the first feed()
+  // Take negative-evidence samples (above). A chain whose whisks never end (a harness that only
+  // senses: crunch-virtual-robot's boards, training) turns them off, or they grow, 32 bytes per
+  // 60 ms, with nothing to hand them to; endWhisk() then gives no free rays.
+  bool negative_evidence = true;
 
   // kWhiskers mounts; pipeline.validate() (errors prefixed "pipeline: "); max_episode_samples
   // below kPoseHistory. okStatus(), or an Error naming the first bad field.
@@ -207,6 +211,7 @@ class SensingChain {
   std::array<signal::ContactDetector, signal::kWhiskers> live_;  // timed feeding's own detectors
   Pose2 free_pose_;                  // the negative-evidence sample being accumulated
   std::uint32_t free_mask_ = 0;
+  bool negative_evidence_;           // SensingChainOptions::negative_evidence
   bool in_whisk_ = false;
   SensingCounts counts_;
 };
