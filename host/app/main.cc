@@ -153,8 +153,8 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
            opt.mapping.chain_fusion = f.value();
            opt.chain_fusion_given = true;
          },
-         "how the global chains become the map (default: pool for the physics sensor, else "
-         "vote): vote (a table half the chains end with) | "
+         "how the global chains become the map (default: pool for the physics sensor and --robot --explore, "
+         "else vote): vote (a table half the chains end with) | "
          "pool (one more chain over their tables) | marginal (posterior probability from the "
          "samples of every chain's coldest --marginal-steps temperatures, kept above 0.5)")
       ->default_str("vote");
@@ -178,8 +178,8 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
            opt.mapping.global_chains = n;
            opt.global_chains_given = true;
          },
-         "independent chains of the global inference (default: 32 for the physics sensor, "
-         "else 8); a table needs half to agree (vote)")
+         "independent chains of the global inference (default: 32 for the physics sensor and --robot "
+         "--explore, else 8); a table needs half to agree (vote)")
       ->default_str("8");
   app.add_option("--threads", opt.mapping.threads,
                  "threads the global inference's chains run on (0: one per core); the map is "
@@ -332,6 +332,8 @@ int runTopLevel(TopLevel& t, RobotOptions& ropt) {
     ropt.models_path = opt.models_path;
     ropt.json_progress = opt.json_progress;
     ropt.mapping = opt.mapping;
+    ropt.chain_fusion_given = opt.chain_fusion_given;
+    ropt.global_chains_given = opt.global_chains_given;
     ropt.serve = opt.serve;
     return runRobot(ropt, std::cout, std::cerr);
   }

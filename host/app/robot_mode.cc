@@ -63,6 +63,10 @@ Result<RobotPlan> planRobot(const RobotOptions& opt) {
   if (!models) return Error{"--robot: " + models.error().message};
   RobotSessionOptions& s = plan.session;
   s = session::sessionOptions(models.value(), opt.mapping, opt.seed);
+  // Exploring, the robot whisks in place at its goals and touches, as the physics sensor does.
+  if (opt.explore) {
+    useInPlaceWhiskFusion(s.mapping, opt.chain_fusion_given, opt.global_chains_given);
+  }
   s.area_hi = {opt.area_width, opt.area_depth};
   s.start = {opt.start_x < 0.0 ? opt.area_width / 2 : opt.start_x,
              opt.start_y < 0.0 ? opt.area_depth / 2 : opt.start_y, opt.start_theta};

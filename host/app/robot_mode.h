@@ -55,6 +55,10 @@ struct RobotOptions {
   bool checksum_includes_header = true;  // the Create 1's checksum quirk (docs/CREATE.md)
   bool json_progress = false;
   MappingOptions mapping;
+  // --chain-fusion / --global-chains given: used as they are; not given and exploring: the
+  // in-place whisk's fusion (mapping_options.h, useInPlaceWhiskFusion).
+  bool chain_fusion_given = false;
+  bool global_chains_given = false;
   // --explore POLICY [--travel-budget M] [--whisk-budget N]: the robot explores instead of
   // roaming (session/controller.h ControllerOptions::explore); validated by planRobot.
   std::optional<exploration::ExploreOptions> explore;

@@ -147,17 +147,10 @@ Result<SimRun> runSimulation(const SimScene& scene, const SimRunOptions& o) {
   MappingOptions mopt = o.mapping;
   mopt.seed = o.seed;
   mopt.model = withSensorNoise(mopt.model, run.noise);
-  // The located chain, whisking in place at every pose, meets a wall with two whiskers and
-  // tells its face from a leg's (ContactReport::face_span): its chains' tables can compete in
-  // the posterior (ChainFusion::kPool). The classifiers' cannot; nor can the roaming robot's
-  // single-whisker touches of walls (the session keeps the vote: docs/BLACKBOARD.md).
-  if (!o.chain_fusion_given) mopt.chain_fusion = physics ? ChainFusion::kPool : ChainFusion::kVote;
-  // Pooled, a table survives if any chain ended with it and the posterior pays for it; one that
-  // no chain found is lost. If a chain finds a table with probability p, n chains all miss it
-  // with (1 - p)^n: 0.10 for p = 1/4 at the default 8 chains, 1e-4 at 32. With the physics
-  // sensor the ODE whisks take about 100 s of the default arena's run and 8 chains 0.6 s, so it
-  // gets the 32 (docs/BLACKBOARD.md, "Faces no leg can cause, and pooling the chains").
-  if (!o.global_chains_given && physics) mopt.global_chains = kPhysicsGlobalChains;
+  // The located chain whisks in place at every pose: pooled chains, 32 of them (their ODE
+  // whisks take about 100 s of the default arena's run, 32 chains a few seconds). The
+  // classifiers' contacts keep the vote (mapping_options.h, useInPlaceWhiskFusion).
+  if (physics) useInPlaceWhiskFusion(mopt, o.chain_fusion_given, o.global_chains_given);
   std::optional<SnapshotRecorder> recorder;
   if (o.snapshot_pose) {
     recorder.emplace(*o.snapshot_pose, o.snapshot_temperature, scene.poses, defaultWhiskerArray());

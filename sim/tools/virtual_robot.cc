@@ -19,6 +19,11 @@
 // Packet ids the Create 1 does not have (outside 0..42) that the child asks for are skipped by
 // the emulator (CreateEmulator), said once on stderr and listed in the summary.
 //
+// --truth-csv FILE writes the robot's true pose every 10 ms of simulated time with the
+// CLOCK_MONOTONIC time it was simulated at (t_ns,sim_s,x_m,y_m,theta_rad): the clock the child
+// stamps what it reads with, so the child's own pose track (`crunchhost export --format csv`,
+// odometry.csv) can be set against the truth (tools/odometry_error.py).
+//
 // Faults (for the tests): --unplug-at/--replug-at (seconds of simulated time), --corrupt-every N
 // (one byte of every Nth tick's bridge bytes flipped), --serial-garbage-every S (garbage bytes
 // on the Create's line), --create-silent (a Create that never answers), --interrupt-at (SIGINT
@@ -35,7 +40,9 @@
 #include <array>
 #include <bitset>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -96,6 +103,13 @@ std::string idList(const std::bitset<256>& ids) {
   return s;
 }
 
+std::uint64_t monotonicNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ull +
+         static_cast<std::uint64_t>(ts.tv_nsec);
+}
+
 void sleepFor(double seconds) {
   timespec ts{0, static_cast<long>(seconds * 1e9)};
   nanosleep(&ts, nullptr);
@@ -116,6 +130,7 @@ int main(int argc, char** argv) {
   bool log_contacts = false;
   bool no_usb_preload = false;
   double interrupt_at = -1.0;
+  std::string truth_csv;
   std::vector<std::string> child;
   app.add_option("--scene", scene_path, "scene file (ARCHITECTURE.md §4)")->required();
   app.add_option("--start", start, "start pose x y theta (default: the scene's first pose)")
@@ -134,6 +149,9 @@ int main(int argc, char** argv) {
                  "simulated second at which the child gets SIGINT (Ctrl-C)");
   app.add_flag("--log-contacts", log_contacts,
                "print each true whisker contact (ODE) as it begins, on stderr");
+  app.add_option("--truth-csv", truth_csv,
+                 "write the true pose every 10 ms of simulated time, with its CLOCK_MONOTONIC "
+                 "time, to this CSV file");
   app.add_flag("--no-usb-preload", no_usb_preload,
                "start the child without the umockdev preload (it sees the Create, not the USB "
                "bridge)");
@@ -205,6 +223,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   sim::VirtualUsbBridge& bridge = *usb.value();
+  std::ofstream truth;
+  if (!truth_csv.empty()) {
+    truth.open(truth_csv);
+    if (!truth) {
+      std::cerr << "crunch-virtual-robot: cannot write --truth-csv " << truth_csv << "\n";
+      return 2;
+    }
+    truth << "t_ns,sim_s,x_m,y_m,theta_rad\n";
+    truth.precision(9);
+  }
   std::cerr << "crunch-virtual-robot: scene " << scene_path << ", USB bridge at "
             << bridge.devicePath() << ", Create on " << create.slavePath() << "\n";
 
@@ -244,6 +272,11 @@ int main(int argc, char** argv) {
     while (r.robot().now() < target && steps < 400) {
       (void)r.step();
       ++ticks;
+      if (truth.is_open() && ticks % 20 == 0) {  // 20 ticks of 500 us
+        const Pose2 q = r.robot().odometry();
+        truth << monotonicNs() << ',' << r.robot().now() - sim0 << ',' << q.x << ',' << q.y << ','
+              << q.theta << '\n';
+      }
       if (log_contacts) {
         for (int w = 0; w < 4; ++w) {
           const auto c = r.robot().contact(w);

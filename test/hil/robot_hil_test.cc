@@ -124,12 +124,11 @@ double angleDiff(double a, double b) { return std::abs(crunch::wrapPi(a - b)); }
 // What issue 12 asks of the robot's map: every table of the scene, within 5 cm and 5 degrees.
 const crunch::MatchTolerance kTableTolerance{0.05, 5.0 * crunch::kPi / 180.0};
 
-// How long the robot roams in each scene before its map must hold every table. The body whisk's
-// fixed roaming (forward, whisk on contact, random turn) first mapped the one table after 19
-// whisks, ~270 s; in 450 s in the two-table room it touched 2 legs of one table and 1 of the
-// other and mapped neither (docs/ROBOT.md, "Maps in the virtual robot"). So these runs are
-// hidden from ctest ([.]: minutes of wall clock each, and the two-table one fails today) until
-// exploration chooses where to touch (issue 14); run them with
+// How long the robot explores each scene (`--explore infogain --model rooms`: it chooses where
+// to whisk, and its map holds walls and tables of any size) before its map must hold every
+// table. The roaming body whisk (forward, whisk on contact, random turn) needed ~270 s for the
+// one table and in 450 s never reached the second (docs/ROBOT.md, "Maps in the virtual
+// robot"). Minutes of wall clock each on an otherwise idle machine, so hidden from ctest ([.]):
 //   build/default/test/hil/robot_hil_test "[hil-map]"
 constexpr int kOneTableSeconds = 330;
 constexpr int kTwoTablesSeconds = 450;
@@ -261,8 +260,8 @@ TEST_CASE("Robot: the virtual robot maps by touch, --replay gives the same map, 
   CHECK(fs::exists(partial / "map.json"));
 }
 
-// `crunchhost --robot` roams `scene` for `seconds`; its map holds every table within 5 cm and
-// 5 degrees, and --replay of its recording gives the same map.
+// `crunchhost --robot --explore infogain --model rooms` explores `scene` for `seconds`; its map
+// holds every table within 5 cm and 5 degrees, and --replay of its recording gives the same map.
 void mapsEveryTable(const HilScene& hil, int seconds) {
   if (realHardware()) {  // the real room is not this scene
     WARN("hil: real devices: the scene needs the virtual robot; not run");
@@ -270,9 +269,10 @@ void mapsEveryTable(const HilScene& hil, int seconds) {
   }
   TempDir dir;
   const fs::path out = dir.path() / "live";
-  const Run r = virtualRobot(
-      "", "--duration " + std::to_string(seconds) + " --map-every 5 --out " + out.string(), hil,
-      3 * seconds);
+  const Run r = virtualRobot("",
+                             "--explore infogain --model rooms --duration " +
+                                 std::to_string(seconds) + " --map-every 5 --out " + out.string(),
+                             hil, 3 * seconds);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   auto scene = crunch::loadScene(hil.path);

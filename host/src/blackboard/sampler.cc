@@ -289,49 +289,149 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
   const double half = 0.5 * side;
   Vec2 away = Vec2{s.x - s.ox, s.y - s.oy};
   away = away.norm() > 0.0 ? Vec2(away.normalized()) : Vec2{1.0, 0.0};
-  const Vec2 c = Vec2{s.x, s.y} + rng_.uniform(half, half * std::sqrt(2.0)) * away +
-                 Vec2{rng_.normal(0, opt_.prime_sigma_r), rng_.normal(0, opt_.prime_sigma_r)};
-  const double theta = axisFromLegs(c, -1, rng_.uniform(0.0, kPi / 2)) +
-                       rng_.normal(0, opt_.prime_sigma_theta);
-  return {c.x(), c.y(), wrapPeriod(theta, kPi / 2)};
+  if (!bb_.hasFreeSpace()) {
+    const Vec2 c = Vec2{s.x, s.y} + rng_.uniform(half, half * std::sqrt(2.0)) * away +
+                   Vec2{rng_.normal(0, opt_.prime_sigma_r), rng_.normal(0, opt_.prime_sigma_r)};
+    const double theta = axisFromLegs(c, -1, rng_.uniform(0.0, kPi / 2)) +
+                         rng_.normal(0, opt_.prime_sigma_theta);
+    return {c.x(), c.y(), wrapPeriod(theta, kPi / 2)};
+  }
+  const double theta = wrapPeriod(axisFromLegs({s.x, s.y}, -1, rng_.uniform(0.0, kPi / 2)) +
+                                      rng_.normal(0, opt_.prime_sigma_theta),
+                                  kPi / 2);
+  const Vec2 jitter{rng_.normal(0, opt_.prime_sigma_r), rng_.normal(0, opt_.prime_sigma_r)};
+  const double reach = rng_.uniform(half, half * std::sqrt(2.0));
+  // With negative evidence, where the leg stands around the point is seen: the whisker that
+  // touched it swept up to it, so the straight continuation of its shaft past a shaft contact
+  // is often swept, and the leg is to the side the whisker turned towards. Its centre lies
+  // anywhere within 90 degrees of `away` (the touched outline faces the whisker): kPointSides
+  // directions across that half-plane, each weighted by what a leg there pays for the free
+  // passes through its core (Blackboard::freeTerm, the factor the acceptance then weighs):
+  // a proposal from the leg's conditional given its free space, not a guess the negative
+  // evidence kills at once (issue 12: on the robot's two-table run no leg on a single point
+  // contact survived a global chain).
+  std::array<double, kPointSides> log_w;
+  double top = -std::numeric_limits<double>::infinity();
+  for (int k = 0; k < kPointSides; ++k) {
+    const double turn = kPi * ((k + 0.5) / kPointSides - 0.5);
+    const Vec2 dir{away.x() * std::cos(turn) - away.y() * std::sin(turn),
+                   away.x() * std::sin(turn) + away.y() * std::cos(turn)};
+    const Vec2 c = Vec2{s.x, s.y} + reach * dir;
+    log_w[static_cast<size_t>(k)] = bb_.freeTerm({c.x(), c.y(), theta}, side);
+    top = std::max(top, log_w[static_cast<size_t>(k)]);
+  }
+  double total = 0.0;
+  for (double& w : log_w) total += (w = std::exp(w - top));
+  double pick = rng_.uniform() * total;
+  int k = 0;
+  while (k < kPointSides - 1 && (pick -= log_w[static_cast<size_t>(k)]) >= 0.0) ++k;
+  const double turn = kPi * ((k + 0.5) / kPointSides - 0.5);
+  const Vec2 dir{away.x() * std::cos(turn) - away.y() * std::sin(turn),
+                 away.x() * std::sin(turn) + away.y() * std::cos(turn)};
+  const Vec2 c = Vec2{s.x, s.y} + reach * dir + jitter;
+  return {c.x(), c.y(), theta};
 }
 
 double Sampler::axisFromLegs(const Vec2& c, int32_t self, double fallback) {
   // Another leg, or a point contact, at a table side's or diagonal's distance from c gives the
-  // table's axes (modulo pi/2) as a table would hold both; each such partner is equally likely
-  // to be chosen. Point contacts count as well as legs: they are there before their legs are.
+  // table's axes (modulo pi/2) as a table would hold both. Point contacts count as well as legs:
+  // they are there before their legs are.
   const ModelParams& p = bb_.params();
+  if (p.sized()) return axisFromPartners(c, self, fallback);
+  // The paper's one size: each partner at a side's or the diagonal's length is equally likely
+  // to be chosen.
   const double w = p.table_width - p.leg_side, d = p.table_depth - p.leg_side;
   const double diag = std::hypot(w, d), diag_angle = std::atan2(d, w);
   const double tol = 2.0 * p.leg_side;
   double axis = fallback;
   int seen = 0;
-  // The rooms model knows no one size: a partner at any distance a side of the prior's range
-  // can span is taken as lying along a side (a diagonal partner then gives a wrong axis, which
-  // its move's acceptance judges).
-  const double side_lo = p.size_min_side - p.leg_max - tol;
-  const double reach = p.sized() ? std::hypot(p.size_max_long, p.size_max_short) : diag + tol;
   const auto consider = [&](const Vec2& other) {
     const Vec2 v = other - c;
     const double len = v.norm(), dir = std::atan2(v.y(), v.x());
     double a;
-    if (p.sized()) {
-      if (len < side_lo || len > p.size_max_long) return;
-      a = dir;
-    } else if (std::abs(len - w) < tol || std::abs(len - d) < tol) a = dir;
+    if (std::abs(len - w) < tol || std::abs(len - d) < tol) a = dir;
     else if (std::abs(len - diag) < tol) a = dir + (rng_.uniform() < 0.5 ? -diag_angle : diag_angle);
     else return;
     if (rng_.uniform() * ++seen < 1.0) axis = a;
   };
-  bb_.legsNear(c, reach, [&](int32_t o) {
+  bb_.legsNear(c, reach(), [&](int32_t o) {
     const LegHyp& l = bb_.leg(o);
     if (o != self && l.alive) consider(l.pose.position());
   });
-  bb_.shapeletsWithin(c, reach, [&](int32_t slot) {
+  bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
     const Shapelet& sh = bb_.shapelet(slot);
     if (!sh.oriented) consider({sh.x, sh.y});
   });
   return axis;
+}
+
+double Sampler::reach() const {
+  const ModelParams& p = bb_.params();
+  if (p.sized()) return std::hypot(p.size_max_long, p.size_max_short);
+  return std::hypot(p.table_width - p.leg_side, p.table_depth - p.leg_side) + 2.0 * p.leg_side;
+}
+
+double Sampler::axisFromPartners(const Vec2& c, int32_t self, double fallback) {
+  // The rooms model knows no one size: a partner q at any distance a side of the prior's range
+  // can span is taken as lying along a side, axis (q - c). Three corners of a rectangle fix it,
+  // so a partner is weighted as proposeParentSized weights its rectangles: 1, plus
+  // smart_parent_gain if another partner stands where the side from c perpendicular to (q - c)
+  // ends, plus smart_parent_gain if one stands at the corner diagonal to c. A partner that is
+  // the far end of a diagonal, or a leg of another object, then rarely sets the axis, where
+  // drawn uniformly it set it as often as the partners that span the table's sides (a room's
+  // walls and other tables give many such partners: issue 12's two-table room).
+  const ModelParams& p = bb_.params();
+  const double tol_end = 2.0 * p.leg_side;
+  const double side_lo = p.size_min_side - p.leg_max - tol_end;
+  const double span_lo = p.size_min_side - p.leg_max, span_hi = p.size_max_long;
+  const double tol = p.cornerLinkRadius() * 0.5 + 0.5 * p.maxLegSide();  // as proposeParentSized
+  std::array<Vec2, kMaxPartners>& q = partners_;
+  int n = 0, seen = 0;
+  const auto keep = [&](const Vec2& other) {
+    const double len = (other - c).norm();
+    if (len < side_lo || len > p.size_max_long) return;
+    // More than kMaxPartners: a uniform sample of them (reservoir).
+    if (n < kMaxPartners) {
+      q[static_cast<size_t>(n++)] = other;
+    } else {
+      const int k = static_cast<int>(rng_.uniform() * (seen + 1));
+      if (k < kMaxPartners) q[static_cast<size_t>(k)] = other;
+    }
+    ++seen;
+  };
+  bb_.legsNear(c, reach(), [&](int32_t o) {
+    const LegHyp& l = bb_.leg(o);
+    if (o != self && l.alive) keep(l.pose.position());
+  });
+  bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
+    const Shapelet& sh = bb_.shapelet(slot);
+    if (!sh.oriented) keep({sh.x, sh.y});
+  });
+  if (n == 0) return fallback;
+  const double gain = opt_.smart_parent ? opt_.smart_parent_gain : 0.0;
+  std::array<double, kMaxPartners>& weight = partner_weights_;
+  double total = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 a = q[static_cast<size_t>(i)] - c;
+    const double span = a.norm();
+    const Vec2 u = a / span, v{-u.y(), u.x()};
+    bool side = false, diagonal = false;
+    for (int j = 0; j < n && gain > 0.0 && !(side && diagonal); ++j) {
+      if (j == i) continue;
+      const Vec2 b = q[static_cast<size_t>(j)] - c;
+      const double along = b.dot(u), across = std::abs(b.dot(v));
+      if (across < span_lo || across > span_hi) continue;
+      if (std::abs(along) < tol) side = true;
+      else if (std::abs(along - span) < tol) diagonal = true;
+    }
+    weight[static_cast<size_t>(i)] = 1.0 + (side ? gain : 0.0) + (diagonal ? gain : 0.0);
+    total += weight[static_cast<size_t>(i)];
+  }
+  double pick = rng_.uniform() * total;
+  int k = 0;
+  while (k < n - 1 && (pick -= weight[static_cast<size_t>(k)]) >= 0.0) ++k;
+  const Vec2 a = q[static_cast<size_t>(k)] - c;
+  return std::atan2(a.y(), a.x());
 }
 
 bool Sampler::pointNear(const Vec2& c, double radius) const {
@@ -568,21 +668,24 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   const int32_t table = bb_.addTable(pose);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
-  if (decideNewTable(table, pose, free_turn, t, e0, beta)) return;
+  if (decideNewTable(table, pose, free_turn ? Turn::kPointSupported : Turn::kNoLeg, t, e0, beta))
+    return;
   bb_.setParent(leg, l.parent);
   for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
   bb_.killTable(table);
   bb_.releaseTable(table);
 }
 
-bool Sampler::decideNewTable(int32_t table, const Pose2& pose, bool free_turn, Touched& t,
+bool Sampler::decideNewTable(int32_t table, const Pose2& pose, Turn turn, Touched& t,
                              double e0, double beta) {
-  // Legs whose orientation nothing but their table constrains turn with it.
+  // Legs whose orientation nothing but their table constrains (or, Turn::kAll, every child)
+  // turn with it.
   IdSet<5> turned;
   std::array<Pose2, 5> turned_from;
-  if (free_turn) {
+  if (turn != Turn::kNoLeg) {
     for (int32_t o : t.legs.span()) {
-      if (bb_.leg(o).parent != table || !pointSupported(bb_.leg(o).pose.position())) continue;
+      if (bb_.leg(o).parent != table) continue;
+      if (turn == Turn::kPointSupported && !pointSupported(bb_.leg(o).pose.position())) continue;
       turned_from[static_cast<size_t>(turned.n)] = bb_.leg(o).pose;
       turned.add(o);
       Pose2 q = bb_.leg(o).pose;
@@ -1259,8 +1362,16 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   const ModelParams& p = bb_.params();
   const LegHyp l = bb_.leg(leg);
   const Vec2 c = l.pose.position();
-  const bool free_turn = opt_.smart_parent && pointSupported(c);
-  const double axis = free_turn ? axisFromLegs(c, leg, l.pose.theta) : l.pose.theta;
+  // The table's axis: from the rectangle the partners complete (axisFromPartners) when only
+  // point contacts support the leg; when oriented ones do, their face gives it half the time and
+  // the partners the other half. The physics classifiers' faces scatter by ~25 degrees on legs
+  // (docs/TRAINING.md), the rectangle of three legs by a few; a table with a face's axis keeps
+  // it, and one with the partners' turns every leg it adopts to its axes (eq. 10's leg-table
+  // angle is stiffer than eq. 12's shapelet-leg angle), the acceptance weighing both.
+  const bool point = opt_.smart_parent && pointSupported(c);
+  const bool from_partners = point || (opt_.smart_parent && rng_.uniform() < 0.5);
+  const double axis = from_partners ? axisFromLegs(c, leg, l.pose.theta) : l.pose.theta;
+  const Turn turn = from_partners ? Turn::kAll : Turn::kNoLeg;
   const Vec2 u{std::cos(axis), std::sin(axis)}, v{-std::sin(axis), std::cos(axis)};
   // Partners: other legs, and point contacts (they come before their legs), around the leg. One
   // on the leg's u axis at a side's span gives the table's side along u; one on its v axis the
@@ -1390,10 +1501,8 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   for (int32_t tab : t.tables.span())
     for (int i = 0; i < bb_.table(tab).n_children; ++i) t.legs.add(bb_.table(tab).children[i]);
   // A leg that turns with the table changes its shapelets' kernels.
-  if (free_turn)
-    for (int32_t o : t.legs.span())
-      if (pointSupported(bb_.leg(o).pose.position()))
-        bb_.shapeletsNear(bb_.leg(o).pose.position(), t.shapelets);
+  if (turn == Turn::kAll)
+    for (int32_t o : t.legs.span()) bb_.shapeletsNear(bb_.leg(o).pose.position(), t.shapelets);
   begin();
   const double e0 = bb_.energyBefore(t);
   const int32_t table = bb_.addTable(pose, tw, td, table_leg);
@@ -1401,7 +1510,7 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   for (int32_t o : adopt.span()) bb_.setLegSide(o, table_leg);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
-  if (decideNewTable(table, pose, free_turn, t, e0, beta)) return;
+  if (decideNewTable(table, pose, turn, t, e0, beta)) return;
   bb_.setParent(leg, l.parent);
   for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
   bb_.setLegSide(leg, old_side[0]);

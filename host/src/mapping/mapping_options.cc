@@ -48,4 +48,10 @@ const char* chainFusionName(ChainFusion f) {
   return "vote";
 }
 
+void useInPlaceWhiskFusion(MappingOptions& options, bool chain_fusion_given,
+                           bool global_chains_given) {
+  if (!chain_fusion_given) options.chain_fusion = ChainFusion::kPool;
+  if (!global_chains_given) options.global_chains = kInPlaceGlobalChains;
+}
+
 }  // namespace crunch

@@ -62,9 +62,6 @@ struct SimScene {
   static SimScene build(Scene scene);
 };
 
-// Global chains for the physics sensor unless --global-chains is given (runSimulation).
-inline constexpr int kPhysicsGlobalChains = 32;
-
 struct SimRunOptions {
   SensorKind sensor = SensorKind::kGaussian;
   NoiseRegime noise = NoiseRegime::realistic();  // gaussian only (ideal and physics: see above)
@@ -75,7 +72,7 @@ struct SimRunOptions {
   // false: mapping.chain_fusion is replaced by the sensor's (pool for physics, else vote);
   // true (`--chain-fusion` given, or a sweep's grid): mapping.chain_fusion is used as it is.
   bool chain_fusion_given = false;
-  // false: mapping.global_chains is replaced by the sensor's (kPhysicsGlobalChains for physics,
+  // false: mapping.global_chains is replaced by the sensor's (kInPlaceGlobalChains for physics,
   // else as given); true (`--global-chains` given, or a sweep's grid): used as it is.
   bool global_chains_given = false;
   // --snapshot K [--snapshot-temperature I] (render/blackboard_snapshot.h): K < poses.size(),

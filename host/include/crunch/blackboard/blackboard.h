@@ -91,6 +91,10 @@ class Blackboard {
     free_ = grid;
     ++gen_;
   }
+  bool hasFreeSpace() const { return free_ != nullptr; }
+  // The negative-evidence term of a leg-sized square at `pose` (0 without a grid): what a leg of
+  // side `side` there pays for the free whisker passes through its core.
+  double freeTerm(const Pose2& pose, double side) const;
 
   // ---- Working memory (the queue of the most recent shapelets, §2.7) ----
   // Adds a shapelet, evicting the oldest when full. Returns its slot.
@@ -245,8 +249,6 @@ class Blackboard {
     if (!in_sweep_) ++gen_;
   }
   double shapeletTerm(int slot) const;
-  // The negative-evidence term of a leg-sized square at `pose` (0 without a grid).
-  double freeTerm(const Pose2& pose, double side) const;
   // Negative evidence at a table's four corners.
   double tableFreeTerm(const TableHyp& table) const;
   // The size priors of the rooms model (0 under the paper's).

@@ -235,6 +235,10 @@ class Sampler {
   Pose2 legAtPoint(const Shapelet& s, double side);
   // A table's axis (modulo pi/2) from the legs around c other than `self`, or `fallback`.
   double axisFromLegs(const Vec2& c, int32_t self, double fallback);
+  // axisFromLegs for the rooms model: partners weighted by the rectangle corners they complete.
+  double axisFromPartners(const Vec2& c, int32_t self, double fallback);
+  // How far from a leg its table's other legs can stand (a side or diagonal of any table).
+  double reach() const;
   // Shapelets lie near c and none is oriented (ContactReport::oriented).
   bool pointSupported(const Vec2& c) const;
   // A point (unoriented) shapelet lies within radius of c.
@@ -263,10 +267,12 @@ class Sampler {
   double priorSpan(double leg_side, double other);
   // The end of a table birth that adopted legs (proposeParent, proposeParentSized): `table` is
   // live with its children set, `t` what the move touches, e0 its energy before. Turns the
-  // children only point contacts support to the table's axes (free_turn), kills the tables the
-  // move emptied, and decides. Accepted: releases them, true. Refused: turns the legs back and
-  // revives those tables, false (the caller restores parents and removes `table`).
-  bool decideNewTable(int32_t table, const Pose2& pose, bool free_turn, Touched& t, double e0,
+  // children to the table's axes (`turn`: no leg, those only point contacts support, or all),
+  // kills the tables the move emptied, and decides. Accepted: releases them, true. Refused:
+  // turns the legs back and revives those tables, false (the caller restores parents and
+  // removes `table`).
+  enum class Turn { kNoLeg, kPointSupported, kAll };
+  bool decideNewTable(int32_t table, const Pose2& pose, Turn turn, Touched& t, double e0,
                       double beta);
   // Proposes wall `id` at a..b (jitterWall, extendWall): the shapelets near the old and the
   // new segment are touched; refused, the wall goes back.
@@ -299,6 +305,12 @@ class Sampler {
   std::vector<int> rj_slots_;  // working-memory slots with a birth box (sweepReversible)
   std::vector<int32_t> wall_slots_;  // shapelets along the walls a move changes
   std::vector<int32_t> inliers_;     // a wall birth's fitted shapelets
+  // axisFromPartners' partners and their weights (fixed size: a sweep allocates nothing).
+  static constexpr int kMaxPartners = 32;
+  // legAtPoint's directions around a point contact when negative evidence is attached.
+  static constexpr int kPointSides = 8;
+  std::array<Vec2, kMaxPartners> partners_{};
+  std::array<double, kMaxPartners> partner_weights_{};
   bool audit_ = false;
   double audit_before_ = 0.0;
 };

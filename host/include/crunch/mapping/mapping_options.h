@@ -94,4 +94,20 @@ struct MappingOptions {
   Status validate() const;
 };
 
+// Global chains for contacts located by whisking in place unless --global-chains is given
+// (useInPlaceWhiskFusion).
+inline constexpr int kInPlaceGlobalChains = 32;
+
+// The fusion of a run whose contacts the located whisker chain makes by whisking in place: the
+// physics sensor (`--sim --sensor-model physics`) and the exploring robot (`--robot --explore`),
+// which run the same chain and the same whisk. Such a whisk meets a wall with two whiskers and
+// tells its face from a leg's (ContactReport::face_span), so the chains' tables can compete in
+// the posterior: chain_fusion kPool, unless `chain_fusion_given`, and kInPlaceGlobalChains
+// chains, unless `global_chains_given` (a table no chain found is lost: 8 chains that each find
+// it with p = 1/4 all miss it with (1 - p)^8 = 0.10, 32 with 1e-4). The roaming robot's single
+// whisker touches of walls keep the vote (docs/BLACKBOARD.md, "Faces no leg can cause, and
+// pooling the chains").
+void useInPlaceWhiskFusion(MappingOptions& options, bool chain_fusion_given,
+                           bool global_chains_given);
+
 }  // namespace crunch
