@@ -130,8 +130,15 @@ const crunch::MatchTolerance kTableTolerance{0.05, 5.0 * crunch::kPi / 180.0};
 // one table and in 450 s never reached the second (docs/ROBOT.md, "Maps in the virtual
 // robot"). Minutes of wall clock each on an otherwise idle machine, so hidden from ctest ([.]):
 //   build/default/test/hil/robot_hil_test "[hil-map]"
+// The one table: 330 s. The two tables: the travel the simulator's stand-in needed (`crunchhost
+// --sim --sensor-model physics --model rooms --explore infogain --travel-budget 20` on
+// hil_two_tables: recall and precision 1.0 on seeds 1-6, where 10 m gave 0.67 and 0.75;
+// docs/EXPLORATION.md), 20 minutes of the robot's time (1,186 s, 91 whisks, 31 bumps on
+// 2026-11-28), capped at 25. Measured then: the standard table within 1.6 cm, not the small
+// one (docs/ROBOT.md): the two-table item of issue 12 is still open.
 constexpr int kOneTableSeconds = 330;
-constexpr int kTwoTablesSeconds = 450;
+constexpr double kTwoTablesMetres = 20.0;
+constexpr int kTwoTablesCapSeconds = 1500;
 
 crunch::Map readMap(const fs::path& path) {
   std::ifstream in(path);
@@ -142,8 +149,8 @@ crunch::Map readMap(const fs::path& path) {
   return map.value();
 }
 
-// Every table of `scene` is in `map` (one-to-one, within kTableTolerance).
-void checkEveryTableFound(const crunch::Map& map, const crunch::Scene& scene) {
+// Every table of `scene` is in `map` (one-to-one, within kTableTolerance); returns whether so.
+bool checkEveryTableFound(const crunch::Map& map, const crunch::Scene& scene) {
   const crunch::Evaluation ev = crunch::evaluate(map, scene, kTableTolerance);
   std::cout << "hil: " << ev.true_tables << " true tables, " << ev.fused_tables
             << " fused; within 5 cm and 5 deg: " << ev.matched << " (recall " << ev.recall
@@ -154,6 +161,7 @@ void checkEveryTableFound(const crunch::Map& map, const crunch::Scene& scene) {
               << t.score << std::endl;
   }
   CHECK(ev.matched == ev.true_tables);
+  return ev.matched == ev.true_tables;
 }
 
 // --replay of the run's recording gives the same map and shapelets.
@@ -260,25 +268,36 @@ TEST_CASE("Robot: the virtual robot maps by touch, --replay gives the same map, 
   CHECK(fs::exists(partial / "map.json"));
 }
 
-// `crunchhost --robot --explore infogain --model rooms` explores `scene` for `seconds`; its map
-// holds every table within 5 cm and 5 degrees, and --replay of its recording gives the same map.
-void mapsEveryTable(const HilScene& hil, int seconds) {
+// `crunchhost --robot --explore infogain --model rooms` explores `scene` for `seconds` or until
+// it has driven `metres` (0: no travel budget); its map holds every table within 5 cm and 5
+// degrees, and --replay of its recording gives the same map.
+void mapsEveryTable(const HilScene& hil, int seconds, double metres = 0.0) {
   if (realHardware()) {  // the real room is not this scene
     WARN("hil: real devices: the scene needs the virtual robot; not run");
     return;
   }
   TempDir dir;
   const fs::path out = dir.path() / "live";
+  const std::string travel =
+      metres > 0.0 ? " --travel-budget " + std::to_string(metres) : std::string();
   const Run r = virtualRobot("",
                              "--explore infogain --model rooms --duration " +
-                                 std::to_string(seconds) + " --map-every 5 --out " + out.string(),
+                                 std::to_string(seconds) + travel + " --map-every 5 --out " +
+                                 out.string(),
                              hil, 3 * seconds);
   INFO(r.output);
   REQUIRE(r.exit_code == 0);
   auto scene = crunch::loadScene(hil.path);
   REQUIRE(scene);
   REQUIRE(!scene.value().tables.empty());
-  checkEveryTableFound(readMap(out / "map.json"), scene.value());
+  if (!checkEveryTableFound(readMap(out / "map.json"), scene.value())) {
+    // Minutes of robot time: keep what the run made (recording, map, report) for a look.
+    const fs::path keep = fs::temp_directory_path() /
+                          ("crunch_hil_map_" + fs::path(hil.path).stem().string());
+    fs::remove_all(keep);
+    fs::copy(out, keep, fs::copy_options::recursive);
+    std::cout << "hil: the run's outputs are kept in " << keep.string() << std::endl;
+  }
   checkReplaySameMap(out, dir.path() / "replay");
 }
 
@@ -291,7 +310,7 @@ TEST_CASE("Robot: the virtual robot maps the table of hil_one_table within 5 cm 
 TEST_CASE("Robot: the virtual robot maps both tables of hil_two_tables within 5 cm and 5 deg, "
           "--replay gives the same map",
           "[.][hil-map]") {
-  mapsEveryTable(kTwoTables, kTwoTablesSeconds);
+  mapsEveryTable(kTwoTables, kTwoTablesCapSeconds, kTwoTablesMetres);
 }
 
 // `crunchhost --robot --explore POLICY` (issue 14): the robot drives to the whisk poses the
