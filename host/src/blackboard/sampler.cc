@@ -310,6 +310,7 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
   // a proposal from the leg's conditional given its free space, not a guess the negative
   // evidence kills at once (issue 12: on the robot's two-table run no leg on a single point
   // contact survived a global chain).
+  std::array<Vec2, kPointSides> centre;
   std::array<double, kPointSides> log_w;
   double top = -std::numeric_limits<double>::infinity();
   for (int k = 0; k < kPointSides; ++k) {
@@ -317,6 +318,7 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
     const Vec2 dir{away.x() * std::cos(turn) - away.y() * std::sin(turn),
                    away.x() * std::sin(turn) + away.y() * std::cos(turn)};
     const Vec2 c = Vec2{s.x, s.y} + reach * dir;
+    centre[static_cast<size_t>(k)] = c;
     log_w[static_cast<size_t>(k)] = bb_.freeTerm({c.x(), c.y(), theta}, side);
     top = std::max(top, log_w[static_cast<size_t>(k)]);
   }
@@ -325,10 +327,7 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
   double pick = rng_.uniform() * total;
   int k = 0;
   while (k < kPointSides - 1 && (pick -= log_w[static_cast<size_t>(k)]) >= 0.0) ++k;
-  const double turn = kPi * ((k + 0.5) / kPointSides - 0.5);
-  const Vec2 dir{away.x() * std::cos(turn) - away.y() * std::sin(turn),
-                 away.x() * std::sin(turn) + away.y() * std::cos(turn)};
-  const Vec2 c = Vec2{s.x, s.y} + reach * dir + jitter;
+  const Vec2 c = centre[static_cast<size_t>(k)] + jitter;
   return {c.x(), c.y(), theta};
 }
 
@@ -1393,12 +1392,11 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
     }
   };
   if (opt_.smart_parent) {
-    const double reach = std::hypot(p.size_max_long, p.size_max_short);
-    bb_.legsNear(c, reach, [&](int32_t o) {
+    bb_.legsNear(c, reach(), [&](int32_t o) {
       const LegHyp& ol = bb_.leg(o);
       if (o != leg && ol.alive) consider(ol.pose.position());
     });
-    bb_.shapeletsWithin(c, reach, [&](int32_t slot) {
+    bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
       const Shapelet& sh = bb_.shapelet(slot);
       if (!sh.oriented && (Vec2{sh.x, sh.y} - c).norm() > tol) consider({sh.x, sh.y});
     });
