@@ -331,6 +331,18 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
   return {c.x(), c.y(), theta};
 }
 
+template <class F>
+void Sampler::partnersNear(const Vec2& c, int32_t self, F&& f) const {
+  bb_.legsNear(c, reach(), [&](int32_t o) {
+    const LegHyp& l = bb_.leg(o);
+    if (o != self && l.alive) f(l.pose.position());
+  });
+  bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
+    const Shapelet& sh = bb_.shapelet(slot);
+    if (!sh.oriented) f(Vec2{sh.x, sh.y});
+  });
+}
+
 double Sampler::axisFromLegs(const Vec2& c, int32_t self, double fallback) {
   // Another leg, or a point contact, at a table side's or diagonal's distance from c gives the
   // table's axes (modulo pi/2) as a table would hold both. Point contacts count as well as legs:
@@ -353,14 +365,7 @@ double Sampler::axisFromLegs(const Vec2& c, int32_t self, double fallback) {
     else return;
     if (rng_.uniform() * ++seen < 1.0) axis = a;
   };
-  bb_.legsNear(c, reach(), [&](int32_t o) {
-    const LegHyp& l = bb_.leg(o);
-    if (o != self && l.alive) consider(l.pose.position());
-  });
-  bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
-    const Shapelet& sh = bb_.shapelet(slot);
-    if (!sh.oriented) consider({sh.x, sh.y});
-  });
+  partnersNear(c, self, consider);
   return axis;
 }
 
@@ -398,14 +403,7 @@ double Sampler::axisFromPartners(const Vec2& c, int32_t self, double fallback) {
     }
     ++seen;
   };
-  bb_.legsNear(c, reach(), [&](int32_t o) {
-    const LegHyp& l = bb_.leg(o);
-    if (o != self && l.alive) keep(l.pose.position());
-  });
-  bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
-    const Shapelet& sh = bb_.shapelet(slot);
-    if (!sh.oriented) keep({sh.x, sh.y});
-  });
+  partnersNear(c, self, keep);
   if (n == 0) return fallback;
   const double gain = opt_.smart_parent ? opt_.smart_parent_gain : 0.0;
   std::array<double, kMaxPartners>& weight = partner_weights_;

@@ -239,6 +239,10 @@ class Sampler {
   double axisFromPartners(const Vec2& c, int32_t self, double fallback);
   // How far from a leg its table's other legs can stand (a side or diagonal of any table).
   double reach() const;
+  // Calls f(position) for each partner of a leg at c: the live legs within reach() but `self`,
+  // and the point (unoriented) shapelets within it (they come before their legs).
+  template <class F>
+  void partnersNear(const Vec2& c, int32_t self, F&& f) const;
   // Shapelets lie near c and none is oriented (ContactReport::oriented).
   bool pointSupported(const Vec2& c) const;
   // A point (unoriented) shapelet lies within radius of c.
