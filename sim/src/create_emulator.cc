@@ -334,7 +334,7 @@ oi::SensorFrame CreateEmulator::snapshot(std::span<const std::uint8_t> ids) {
     std::int32_t v = 0;
     switch (id) {
       case oi::kBumpsWheelDrops:
-        v = (body_.bumped() ? oi::kBumpMask : 0) | drops_;
+        v = static_cast<std::uint8_t>(body_.bumper()) | drops_;  // bits 0, 1: right, left
         break;
       case oi::kDistance: {
         const double whole = std::clamp(std::trunc(dist_acc_mm_), -32768.0, 32767.0);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace crunch::sim {
 
@@ -26,12 +27,14 @@ void KinematicBase::step(double dt) {
   next.y += chord * std::sin(pose_.theta + half);
   next.theta = wrapPi(pose_.theta + dtheta);
   if (world_ != nullptr && world_->bodyCollides(next)) {
-    bumped_ = true;
+    const std::optional<Vec2> hit = world_->nearestSurfacePoint(next.position());
+    const Vec2 to = hit ? *hit - next.position() : Vec2(std::cos(next.theta), std::sin(next.theta));
+    bumper_ = bumperAt(std::atan2(to.y(), to.x()) - next.theta);
     ++refused_;
     return;
   }
   pose_ = next;
-  bumped_ = false;
+  bumper_ = Bumper::kReleased;
 }
 
 }  // namespace crunch::sim

@@ -327,7 +327,7 @@ void WhiskeredRobot::place(const Pose2& pose) {
   pose_ = pose;
   wheels_.halt();
   resetWhiskers(allWhiskers());
-  bumped_ = frontBumperPressed(pose_);
+  bumper_ = frontBumper(pose_);
   // Straight at rest with the wheels stopped: the settled state of the zero command.
   command_ = stepped_ = Command{};
   since_change_ = response_steps_;
@@ -355,7 +355,7 @@ void WhiskeredRobot::moveBase(double h) {
   double v = wheels_.v();
   Pose2 next = integrateArc(pose_, v, omega, h);
   // The bumper feels where the wheels would take the body, whether or not they can.
-  const bool pressed = frontBumperPressed(next);
+  const Bumper pressed = frontBumper(next);
   bool refused = false;
   if (v != 0.0 && world_.bodyCollides(next) && clearance(next) < clearance(pose_) - 1e-12) {
     // No translation deeper into an obstacle (the wheels stall), ahead or behind; turning in
@@ -368,18 +368,22 @@ void WhiskeredRobot::moveBase(double h) {
   setBaseBodies(v, omega, h);
   pose_ = next;
   // Where the body ends, if not where the bumper was felt above.
-  bumped_ = pressed || (refused && frontBumperPressed(pose_));
+  bumper_ = pressed != Bumper::kReleased ? pressed : refused ? frontBumper(pose_) : Bumper::kReleased;
 }
 
-bool WhiskeredRobot::frontBumperPressed(const Pose2& p) const {
+Bumper WhiskeredRobot::frontBumper(const Pose2& p) const {
   const Vec2 centre = p.position();
   const Vec2 ahead{std::cos(p.theta), std::sin(p.theta)};
+  unsigned bits = 0;
   for (const OrientedRect& r : world_.footprints()) {
     if ((r.pose.position() - centre).norm() - r.circumradius() > kRobotRadius + kBumperReach) continue;
     const PerimeterPoint q = closestOnPerimeter(r, centre);
-    if (q.distance <= kRobotRadius + kBumperReach && (q.point - centre).dot(ahead) > 0.0) return true;
+    const Vec2 d = q.point - centre;
+    if (q.distance <= kRobotRadius + kBumperReach && d.dot(ahead) > 0.0) {
+      bits |= static_cast<unsigned>(bumperAt(std::atan2(d.y(), d.x()) - p.theta));
+    }
   }
-  return false;
+  return static_cast<Bumper>(bits);
 }
 
 void WhiskeredRobot::setBaseBodies(double v, double omega, double h) {

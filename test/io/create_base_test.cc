@@ -222,6 +222,24 @@ TEST_CASE("CreateBase: a bump stops the motors from inside the driver", "[io][cr
         [](KinematicBase& b, CreateEmulator&) { return std::abs(b.commandedV() + 0.1) < 1e-3; });
   }));
   REQUIRE(pollUntil(*base, 2.0, [&] { return !base->bumped(); }));
+  CHECK(base->bumper() == Bumper::kReleased);
+}
+
+TEST_CASE("CreateBase: the bumper's switches arrive as packet 7's bits", "[io][create][pty]") {
+  // Head on into the east wall closes both switches; driving at it 60 degrees to the left of
+  // the wall's normal, the wall is met at the body's right: the right switch only.
+  Scene scene;  // 4 x 4 m arena, walled
+  auto world = sim::World::build(scene);
+  for (const double heading : {0.0, kPi / 3}) {
+    Robot robot(world.get(), Pose2{3.635 - 0.05, 2.0, heading});
+    auto base = openBase(robot);
+    REQUIRE(pollUntil(*base, 5.0, [&] {
+      REQUIRE(base->drive(0.2, 0.0).ok());
+      return base->bumped();
+    }));
+    CHECK(base->bumper() == (heading == 0.0 ? Bumper::kBoth : Bumper::kRight));
+    CHECK((base->sensors().bumpsAndDrops() & oi::kDropMask) == 0);
+  }
 }
 
 TEST_CASE("CreateBase: the watchdog stops a stalled control loop", "[io][create][pty]") {

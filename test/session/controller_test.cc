@@ -45,6 +45,7 @@ class FakeRobot final : public MobileBase {
   }
   Pose2 odometry() const override { return base.odometry(); }
   bool bumped() const override { return base.bumped(); }
+  Bumper bumper() const override { return base.bumper(); }
   double now() const override { return base.now(); }
 
   Status poll(double /*timeout_s*/) {

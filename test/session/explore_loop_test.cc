@@ -182,3 +182,33 @@ TEST_CASE("ExploreLoop: a leg grazed at the side: the robot turns to face the bu
   CHECK(loop.report().bumps <= 2);
   CHECK((base.odometry().position() - Vec2(3.5, 1.5)).norm() < 0.05);
 }
+
+TEST_CASE("ExploreLoop: without a bump_point hook, the bumper's switches place the bump at the "
+          "side that was hit",
+          "[session]") {
+  // The grazed leg of the test above, with only the base's bumper to go by (as on the Create):
+  // the left switch puts the hit 41.5 degrees to the left on the rim (robot/bumper.h), about
+  // 7 cm from the leg's corner, where the body's front on its heading would be 18 cm off.
+  TableSpec t;
+  const Vec2 leg{2.0, 1.5 + kRobotRadius + 0.5 * t.leg - 0.015};
+  t.pose = {leg.x() + 0.5 * (t.width - t.leg), leg.y() + 0.5 * (t.depth - t.leg), 0.0};
+  const Scene scene = room({t});
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {0.5, 1.5, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  ListPolicy policy({{3.5, 1.5, 0.0}});
+  ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
+                   ExploreLoop::Options{}, {});
+  run(loop, base, 400.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason == "list done");
+  REQUIRE(loop.report().bumps >= 1);
+  const Vec2 hit = loop.report().bump_points[0];
+  INFO("hit " << hit.x() << ", " << hit.y());
+  CHECK(hit.y() > 1.5 + 0.08);  // on the left, where the leg is
+  const auto surface = world->nearestSurfacePoint(hit);
+  REQUIRE(surface);
+  CHECK((*surface - hit).norm() < 0.08);
+  CHECK(loop.report().bumps <= 2);
+  CHECK((base.odometry().position() - Vec2(3.5, 1.5)).norm() < 0.05);
+}

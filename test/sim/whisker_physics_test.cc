@@ -23,6 +23,7 @@
 #include "crunch_sim/world.h"
 #include "support/one_table.h"
 
+using crunch::Bumper;
 using crunch::kPi;
 using crunch::kRobotRadius;
 using crunch::Pose2;
@@ -569,10 +570,21 @@ TEST_CASE("WhiskeredRobot: backing into a leg stalls the wheels but presses no b
   REQUIRE_FALSE(robot->bumped());
   driveFor(*robot, 0.2, 0.0, 0.5, h);
   CHECK(robot->bumped());
+  CHECK(robot->bumper() == Bumper::kBoth);  // head on: both switches
   driveFor(*robot, 0.0, 0.0, 0.1, h);
   CHECK(robot->bumped());  // stopped against it
   driveFor(*robot, -0.2, 0.0, 0.2, h);
   CHECK_FALSE(robot->bumped());
+  CHECK(robot->bumper() == Bumper::kReleased);
+  // The same leg met off to the body's left (facing -x, left is -y): the left switch only; and
+  // off to its right, the right switch only.
+  for (const double side : {1.0, -1.0}) {
+    robot->place({1.625 + 0.025 + kRobotRadius + 0.05, 1.775 + side * 0.12, kPi});
+    REQUIRE_FALSE(robot->bumped());
+    driveFor(*robot, 0.2, 0.0, 0.5, h);
+    CHECK(robot->bumped());
+    CHECK(robot->bumper() == (side > 0 ? Bumper::kLeft : Bumper::kRight));
+  }
   checkHealthy(h);
 }
 

@@ -267,8 +267,8 @@ void RobotController::startExploring() {
                       int n, std::vector<MapSample>& out) {
     session_.drawSamples(n, beta, sweeps, out);
   };
-  // No bump_point: the Create's bumpers say only that the front hit something (the loop takes
-  // the body's front point on its heading).
+  // No bump_point: the Create's bumper switches say only which side hit something (the loop
+  // takes the expected point for those switches, robot/bumper.h).
   explore_ = std::make_unique<ExploreLoop>(frame_base_, *known_, *policy_, session_.options().mounts,
                                            session_.options().mapping.model,
                                            std::vector<Pose2>{}, o, std::move(hooks));

@@ -101,8 +101,8 @@ bool ExploreLoop::budgetReached(std::string& why) const {
 }
 
 Status ExploreLoop::afterBump() {
-  // A goal that keeps bumping (the bump point is only where the front of the body was; an
-  // object hit at the side stays unknown) is given up after max_bumps_per_goal.
+  // A goal that keeps bumping where it bumped before (the bumper's switches give the side, not
+  // the point, so an object can stay unmarked) is given up after max_bumps_per_goal.
   if (goal_bumps_ >= options_.max_bumps_per_goal || !plan()) {
     if (failGoal() >= options_.max_failed_goals) {
       finish("boxed in: " + std::to_string(failed_) + " goals in a row could not be reached");
@@ -192,12 +192,13 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
   if (base_.bumped() && (phase_ == Phase::kFollow || phase_ == Phase::kAlign)) {
     std::optional<Vec2> told;
     if (hooks_.bump_point) told = hooks_.bump_point(pose);
+    // Else where the bumper's switches say (robot/bumper.h): ahead for both, 41.5 degrees to
+    // the side for one, the expected bearing of a hit that closes only that switch.
     const Vec2 hit = told ? *told
-                          : pose.position() + options_.explore.planner.robot_radius *
-                                                  Vec2(std::cos(pose.theta), std::sin(pose.theta));
+                          : expectedBumpPoint(pose, base_.bumper(),
+                                              options_.explore.planner.robot_radius);
     known_.markBump(hit);
     ++report_.bumps;
-    ++goal_bumps_;
     report_.bump_points.push_back(hit);
     // The bumper says only that something is at the front; the whiskers can say where. Once
     // backed off, a whisk in place sweeps the front (the four whiskers' sweeps join from -49
@@ -207,6 +208,9 @@ Status ExploreLoop::update(std::uint32_t contact, const Vec2* touch) {
       return (t - hit).norm() < options_.touch_separation;
     });
     if (bump_whisk_) touches_.push_back(hit);
+    // A bump at a new place found an obstacle the plan did not know, now marked: replanning is
+    // progress. A bump again where one was is what makes a goal futile.
+    if (!bump_whisk_) ++goal_bumps_;
     // Straight away from the hit, facing it: reversing at once when it is ahead (the Create's
     // bumpers are at the front), else first turned in place to face it (the body is a disc): a
     // body grazing a leg at its side would graze it again backing along its heading, and the

@@ -10,7 +10,8 @@
 // base and returns an Error (until issue 11 it stopped and returned ok). step(dt) advances the
 // clock by dt, ramps the wheels over dt, and moves the body along the exact arc of the wheel
 // speeds then in effect; if the new pose collides, the move is refused (the body stays put) and
-// bumped() turns true; it turns false again at the next step that moves the body. odometry() is
+// bumped() turns true, with bumper() the switches a hit at the bearing of the nearest wall or leg
+// point would close (robot/bumper.h); it turns false again at the next step that moves the body. odometry() is
 // the true pose (this base has no wheel slip). The options must be valid
 // (DiffDrive::Options::validate; asserted).
 // Thread-safety: none. Allocation: none after construction.
@@ -39,7 +40,8 @@ class KinematicBase final : public MobileBase {
 
   Status drive(double v, double omega) override;
   Pose2 odometry() const override { return pose_; }
-  bool bumped() const override { return bumped_; }
+  bool bumped() const override { return bumper_ != Bumper::kReleased; }
+  Bumper bumper() const override { return bumper_; }
   double now() const override { return time_; }
 
   // Advances time by dt seconds (dt <= 0 or non-finite: nothing happens).
@@ -47,7 +49,7 @@ class KinematicBase final : public MobileBase {
   // Teleports to `pose` (not checked for collision), clears the bump.
   void place(const Pose2& pose) {
     pose_ = pose;
-    bumped_ = false;
+    bumper_ = Bumper::kReleased;
   }
 
   double commandedV() const { return wheels_.v(); }          // in effect, after clamping, m/s
@@ -69,7 +71,7 @@ class KinematicBase final : public MobileBase {
   DiffDrive wheels_;
   Pose2 pose_;
   double time_ = 0.0;
-  bool bumped_ = false;
+  Bumper bumper_ = Bumper::kReleased;
   std::uint64_t refused_ = 0;
 };
 

@@ -33,7 +33,9 @@
 //     (within kRobotRadius + kBumperReach of the centre), at the pose or where the step's
 //     command would have taken it, updated every substep (turning in place too). A contact
 //     behind the axle stalls the wheels but presses no bumper, as on the Create: a robot that
-//     backs into a leg is not told "bumped" and so does not try to back off further into it
+//     backs into a leg is not told "bumped" and so does not try to back off further into it.
+//     bumper() says which of its two switches close (robot/bumper.h, bumperAt: the bearing of
+//     the touching wall's or leg's nearest point from the centre; both for several)
 //     (the 1 h soak of 2026-11-28 found that loop: docs/HARDENING.md).
 //   - Each whisker is a chain of rigid capsules joined by two-axis spring-damper joints (ODE
 //     universal joints): axis 1 vertical (in-plane, "horizontal" bending), axis 2 horizontal
@@ -277,7 +279,8 @@ class WhiskeredRobot final : public MobileBase {
   // The exact pose (zero odometry noise, §2.8); theta is integrated, not wrapped.
   Pose2 odometry() const override { return pose_; }
   // The bumper is pressed (see the top of this file).
-  bool bumped() const override { return bumped_; }
+  bool bumped() const override { return bumper_ != Bumper::kReleased; }
+  Bumper bumper() const override { return bumper_; }
   double now() const override { return time_; }
 
   // Wheel speeds (left, right) in effect after clamping, m/s.
@@ -384,8 +387,8 @@ class WhiskeredRobot final : public MobileBase {
   static void nearCallback(void* data, dxGeom* o1, dxGeom* o2);
   void onNear(dxGeom* o1, dxGeom* o2);
   double clearance(const Pose2& p) const;
-  // The front bumper at pose p (see the top of this file).
-  bool frontBumperPressed(const Pose2& p) const;
+  // The front bumper's switches at pose p (see the top of this file).
+  Bumper frontBumper(const Pose2& p) const;
   // How far beyond the body's rim the bumper still feels a wall or leg, metres: the body stops
   // within one substep's travel (0.5 m/s x 0.5 ms = 0.25 mm) of touching.
   static constexpr double kBumperReach = 0.0005;
@@ -415,7 +418,7 @@ class WhiskeredRobot final : public MobileBase {
   Pose2 pose_;
   DiffDrive wheels_;  // the commanded and actual wheel speeds
   double time_ = 0.0;
-  bool bumped_ = false;
+  Bumper bumper_ = Bumper::kReleased;
   long long refused_steps_ = 0;
   long long refined_steps_ = 0;
   // Free-running (see the top of this file).

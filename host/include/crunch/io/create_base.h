@@ -75,6 +75,9 @@ class CreateBase final : public MobileBase {
   Status drive(double v, double omega) override;
   Pose2 odometry() const override { return tracker_.odometry(); }
   bool bumped() const override { return tracker_.bumped(); }
+  Bumper bumper() const override {
+    return static_cast<Bumper>(tracker_.bumpsAndDrops() & oi::kBumpMask);
+  }
   // Seconds since open() (steady clock).
   double now() const override;
 

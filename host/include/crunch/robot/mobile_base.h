@@ -10,6 +10,7 @@
 
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
+#include "crunch/robot/bumper.h"
 
 namespace crunch {
 
@@ -27,6 +28,9 @@ class MobileBase {
   virtual Pose2 odometry() const = 0;
   // A bumper or wheel drop is active: behaviours stop and back off.
   virtual bool bumped() const = 0;
+  // Which of the front bumper's switches are pressed (robot/bumper.h); a wheel drop alone is
+  // kReleased. A base that cannot tell the sides reports kBoth while bumped().
+  virtual Bumper bumper() const { return bumped() ? Bumper::kBoth : Bumper::kReleased; }
   // Seconds since the base started (monotonic).
   virtual double now() const = 0;
 };

@@ -200,6 +200,7 @@ class RobotController {
     Status drive(double v, double omega) override { return base_.drive(v, omega); }
     Pose2 odometry() const override { return session_.pose(); }
     bool bumped() const override { return base_.bumped(); }
+    Bumper bumper() const override { return base_.bumper(); }
     double now() const override { return base_.now(); }
 
    private:

@@ -11,13 +11,15 @@
 //      KnownSpace (free rays, contacts, the map's obstacles)
 //   -> decide again.
 // A bump (base.bumped()) while driving or turning: stop, record the bump point (Hooks::bump_point,
-// else the body's front on its heading, radius kRobotRadius) as occupied in the KnownSpace and in the report, back off
+// else where the base's bumper switches put it, robot/bumper.h expectedBumpPoint on the rim of
+// radius PlannerOptions::robot_radius) as occupied in the KnownSpace and in the report, back off
 // `backoff` straight away from the bump point, facing it (turned in place first unless it is
-// within 30 degrees of ahead, as the Create's front bumper's always is), and, if the bump point is touch_separation from every touch and bump acted on
-// before, whisk in place there (a touch whisk: the whiskers locate what the bumper only felt,
-// so the next plan goes round it); then replan to the same goal (a new decision if it is now
-// unreachable, or after max_bumps_per_goal bumps on the way to it: the bumper says only that
-// the front hit something, so an object met at the side can bump again).
+// within 30 degrees of ahead, as a hit that closes both switches is), and, if the bump point is
+// touch_separation from every touch and bump acted on before, whisk in place there (a touch
+// whisk: the whiskers locate what the bumper only felt, so the next plan goes round it); then replan to the same goal (a new decision if it is now
+// unreachable, or after max_bumps_per_goal bumps on the way to it within touch_separation of a
+// touch or bump before: the switches give the side, not the point, so an object can bump again;
+// a bump at a new place is a new obstacle, marked, and does not count).
 // A whisker touching while driving (update's contact mask): if the touch is at least
 // touch_separation from every occupied cell of the KnownSpace and every touch acted on before,
 // stop and whisk in place there (new evidence, reported like any whisk), then replan to the goal;
@@ -63,7 +65,7 @@ class ExploreLoop {
     double touch_separation = 0.05;   // m: a transit touch nearer known contacts is not new
     double record_every = 0.05;       // m between the path's recorded poses
     int max_failed_goals = 10;        // goal positions in a row not reached: boxed in
-    int max_bumps_per_goal = 3;       // bumps on the way to one goal: give it up, decide again
+    int max_bumps_per_goal = 3;       // repeated bumps on the way to one goal: give it up
     std::uint64_t seed = 1;           // the policy's stream
     BodyWhisk::Options whisk;         // the in-place whisk
     Status validate() const;
@@ -75,7 +77,7 @@ class ExploreLoop {
     // n posterior draws for the policy (when it wants any); unset: none.
     std::function<void(int n, std::vector<MapSample>& out)> samples;
     // Where the body hit, if the base can tell (the simulator knows the obstacle; the Create's
-    // bumpers say only left/right). Unset or nullopt: the body's front point on its heading.
+    // bumpers say only left/right). Unset or nullopt: from base.bumper() (robot/bumper.h).
     std::function<std::optional<Vec2>(const Pose2& pose)> bump_point;
   };
 
