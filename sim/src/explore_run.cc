@@ -121,8 +121,10 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
       next_curve_m = (std::floor(travel_now / eo.curve_step_m) + 1.0) * eo.curve_step_m;
     }
   };
+  // Simulated time stands still while the draws are made: all at once.
   auto samples = [&](int n, std::vector<MapSample>& out) {
     mapper.drawSamples(n, eo.sample_beta, eo.sample_sweeps, out);
+    return true;
   };
 
   ExploreRun run;

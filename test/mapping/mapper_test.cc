@@ -544,6 +544,40 @@ TEST_CASE("Mapper::drawSamples: deterministic by seed, every draw explains the c
   CHECK(distinct >= 8);
 }
 
+TEST_CASE("Mapper::continueSamples: a slice of sweeps per call makes drawSamples' draws",
+          "[mapping][mapper]") {
+  // The robot's control loop draws a decision's samples one sweep per step (controller.cc);
+  // called until it returns true, the draws must be the ones drawSamples makes at once, and a
+  // request must take as many calls as the sweeps it needs (the annealing's, then
+  // sweeps_between per draw), never more than max_sweeps per call.
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  const MappingOptions o = options(5, 0);
+  Mapper whole(mounts, lo, hi, o), sliced(mounts, lo, hi, o);
+  std::vector<MapSample> a, b;
+  const int anneal = o.sampler.schedule_steps * o.sampler.sweeps_per_temperature;
+  for (std::size_t t = 0; t < script.poses.size(); ++t) {
+    whole.addPose(script.poses[t], script.reports[t], script.rays[t]);
+    sliced.addPose(script.poses[t], script.reports[t], script.rays[t]);
+    if (t % 3 != 2) continue;
+    whole.drawSamples(4, 0.5, 3, a);
+    const std::size_t before = b.size();
+    int calls = 1;
+    while (!sliced.continueSamples(4, 0.5, 3, b, 2)) ++calls;
+    CHECK(b.size() == before + 4);
+    // New shapelets each time: the annealing (anneal sweeps) and 4 draws of 3 sweeps, 2 a call.
+    CHECK(calls == (anneal + 4 * 3 + 1) / 2);
+  }
+  REQUIRE(a.size() == b.size());
+  REQUIRE_FALSE(a.empty());
+  for (std::size_t i = 0; i < a.size(); ++i) CHECK(sameSample(a[i], b[i]));
+  // With nothing new the next request skips the annealing: 4 draws of 3 sweeps, one per call.
+  int calls = 1;
+  while (!sliced.continueSamples(4, 0.5, 3, b, 1)) ++calls;
+  CHECK(calls == 12);
+}
+
 TEST_CASE("Mapper::drawSamples: drawing does not change the run's maps", "[mapping][mapper]") {
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
   const Script script = tableScript(mounts);

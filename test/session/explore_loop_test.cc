@@ -32,6 +32,23 @@ class ListPolicy final : public exploration::ExplorePolicy {
   std::size_t i_ = 0;
 };
 
+// The list policy wanting `wanted` posterior draws, recording how many it was given.
+class SamplingListPolicy final : public exploration::ExplorePolicy {
+ public:
+  SamplingListPolicy(std::vector<Pose2> goals, int wanted) : list_(std::move(goals)), wanted_(wanted) {}
+  exploration::ExplorePolicyKind kind() const override { return exploration::ExplorePolicyKind::kGrid; }
+  int samplesWanted() const override { return wanted_; }
+  exploration::Decision next(const exploration::ExploreState& state, Rng& rng) override {
+    given.push_back(state.samples.size());
+    return list_.next(state, rng);
+  }
+  std::vector<std::size_t> given;
+
+ private:
+  ListPolicy list_;
+  int wanted_;
+};
+
 Scene room(std::vector<TableSpec> tables = {}) {
   Scene s;
   s.width = 4.0;
@@ -211,4 +228,48 @@ TEST_CASE("ExploreLoop: without a bump_point hook, the bumper's switches place t
   CHECK((*surface - hit).norm() < 0.08);
   CHECK(loop.report().bumps <= 2);
   CHECK((base.odometry().position() - Vec2(3.5, 1.5)).norm() < 0.05);
+}
+
+TEST_CASE("ExploreLoop: a samples hook that draws over several updates: the robot stands still "
+          "until the draws are in",
+          "[session]") {
+  // The robot's hook draws a slice per control step (controller.cc) and returns false until
+  // the decision's draws are all made: the loop must not decide on part of them, nor move.
+  const Scene scene = room();
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {0.6, 0.6, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  SamplingListPolicy policy({{1.2, 0.6, 0.0}, {1.8, 0.6, 0.0}}, 3);
+  int calls = 0;
+  std::vector<std::size_t> sizes_seen;
+  ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {},
+                   ExploreLoop::Options{},
+                   {.whisked = {},
+                    .samples = [&](int n, std::vector<MapSample>& out) {
+                      ++calls;
+                      sizes_seen.push_back(out.size());
+                      if (calls % 5 != 0) return false;  // four updates of work, then the draws
+                      for (int i = 0; i < n; ++i) out.push_back(MapSample{});
+                      return true;
+                    },
+                    .bump_point = {}});
+  const Pose2 start = base.odometry();
+  for (int step = 0; step < 4; ++step) {
+    REQUIRE(loop.update(0));
+    base.step(kDt);
+    CHECK(loop.phase() == ExploreLoop::Phase::kDecide);
+    CHECK_FALSE(loop.goal().has_value());
+  }
+  CHECK(base.odometry().position() == start.position());
+  CHECK(policy.given.empty());
+  run(loop, base, 200.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason == "list done");
+  // Three decisions (two goals, then "list done"), each given all 3 draws and none left over.
+  REQUIRE(policy.given.size() == 3);
+  for (const std::size_t g : policy.given) CHECK(g == 3);
+  CHECK(calls == 15);
+  // Within a decision the hook sees the same vector, empty at its first call.
+  for (int c = 0; c < calls; ++c) CHECK(sizes_seen[static_cast<std::size_t>(c)] == 0);
+  CHECK(loop.report().whisks == 2);
 }

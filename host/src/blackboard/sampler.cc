@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -82,16 +83,22 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
 }
 
 void Sampler::anneal() {
+  const int n = annealSweeps();
+  for (int k = 0; k < n; ++k) annealSweep(k);
+}
+
+void Sampler::annealSweep(int k) {
+  assert(k >= 0 && k < annealSweeps());
   const bool rj = opt_.acceptance == Acceptance::kReversibleJump;
-  if (rj) enterReversibleSpace();
-  for (std::size_t step = 0; step < betas_.size(); ++step) {
-    const double beta = betas_[step];
-    for (int s = 0; s < opt_.sweeps_per_temperature; ++s) {
-      sweep(beta);
-      if (opt_.after_sweep) opt_.after_sweep(static_cast<int>(step), s, beta, bb_);
-    }
+  if (k == 0 && rj) enterReversibleSpace();
+  const int step = k / opt_.sweeps_per_temperature;
+  const int s = k % opt_.sweeps_per_temperature;
+  const double beta = betas_[static_cast<std::size_t>(step)];
+  sweep(beta);
+  if (opt_.after_sweep) opt_.after_sweep(step, s, beta, bb_);
+  if (s + 1 == opt_.sweeps_per_temperature) {
     if (opt_.prune && !rj) prune();
-    if (opt_.after_temperature) opt_.after_temperature(static_cast<int>(step), beta, bb_);
+    if (opt_.after_temperature) opt_.after_temperature(step, beta, bb_);
   }
 }
 

@@ -1,6 +1,7 @@
 #include "crunch/mapping/mapper.h"
 
 #include <algorithm>
+#include <limits>
 #include <utility>
 
 #include "crunch/core/parallel.h"
@@ -255,30 +256,58 @@ int Mapper::addPose(const Pose2& pose, std::span<const ContactReport> reports,
 }
 
 void Mapper::drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out) {
+  while (!continueSamples(n, beta, sweeps_between, out, std::numeric_limits<int>::max())) {
+  }
+}
+
+bool Mapper::continueSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out,
+                             int max_sweeps) {
   const std::vector<Shapelet>& run = map_.shapelets;
-  if (run.empty() || n <= 0) return;
-  const bool fresh = sample_fed_ < run.size();
-  if (!sample_board_ || static_cast<std::size_t>(sample_board_->workingMemoryCapacity()) < run.size()) {
-    const int capacity = static_cast<int>(std::max<std::size_t>(256, 2 * run.size()));
-    sample_sampler_.reset();
-    sample_board_ = std::make_unique<Blackboard>(options_.model, capacity, 4 * capacity + 64);
-    sample_board_->setFreeSpace(options_.negative_evidence ? &free_space_ : nullptr);
-    sample_sampler_ = std::make_unique<Sampler>(*sample_board_, options_.sampler, sample_rng_);
-    sample_fed_ = 0;
-  }
-  for (; sample_fed_ < run.size(); ++sample_fed_) sample_board_->pushShapelet(run[sample_fed_]);
-  if (fresh) sample_sampler_->anneal();
-  for (int i = 0; i < n; ++i) {
-    for (int s = 0; s < sweeps_between; ++s) sample_sampler_->sweep(beta);
-    MapSample draw;
-    mapTablesOf(*sample_sampler_, options_.model, draw.tables, sized_tables_);
-    if (options_.model.walled()) {
-      std::vector<WallHyp> walls;
-      sample_sampler_->mapWalls(walls);
-      for (const WallHyp& w : walls) draw.walls.push_back({w.a, w.b, 1.0});
+  if (!request_.active) {
+    if (run.empty() || n <= 0) return true;
+    const bool fresh = sample_fed_ < run.size();
+    if (!sample_board_ ||
+        static_cast<std::size_t>(sample_board_->workingMemoryCapacity()) < run.size()) {
+      const int capacity = static_cast<int>(std::max<std::size_t>(256, 2 * run.size()));
+      sample_sampler_.reset();
+      sample_board_ = std::make_unique<Blackboard>(options_.model, capacity, 4 * capacity + 64);
+      sample_board_->setFreeSpace(options_.negative_evidence ? &free_space_ : nullptr);
+      sample_sampler_ = std::make_unique<Sampler>(*sample_board_, options_.sampler, sample_rng_);
+      sample_fed_ = 0;
     }
-    out.push_back(std::move(draw));
+    for (; sample_fed_ < run.size(); ++sample_fed_) sample_board_->pushShapelet(run[sample_fed_]);
+    request_ = SampleRequest{true, 0, fresh ? sample_sampler_->annealSweeps() : 0, 0, 0};
   }
+  for (int budget = max_sweeps;;) {
+    const bool annealing = request_.anneal_next < request_.anneal_total;
+    if (annealing || request_.between < sweeps_between) {
+      if (budget-- <= 0) return false;
+      if (annealing) {
+        sample_sampler_->annealSweep(request_.anneal_next++);
+      } else {
+        sample_sampler_->sweep(beta);
+        ++request_.between;
+      }
+      continue;
+    }
+    drawOne(out);
+    request_.between = 0;
+    if (++request_.drawn == n) {
+      request_.active = false;
+      return true;
+    }
+  }
+}
+
+void Mapper::drawOne(std::vector<MapSample>& out) {
+  MapSample draw;
+  mapTablesOf(*sample_sampler_, options_.model, draw.tables, sized_tables_);
+  if (options_.model.walled()) {
+    std::vector<WallHyp> walls;
+    sample_sampler_->mapWalls(walls);
+    for (const WallHyp& w : walls) draw.walls.push_back({w.a, w.b, 1.0});
+  }
+  out.push_back(std::move(draw));
 }
 
 FreeSpaceLayer sweptLayer(const FreeSpaceGrid& grid) {

@@ -252,6 +252,11 @@ bool RobotController::roaming() {
 }
 
 namespace {
+// Sweeps of the exploring robot's sample chain per control step while a decision's posterior
+// draws are made (Mapper::continueSamples): one sweep over the whole run's hypotheses is a few
+// milliseconds, well inside the Create's 0.5 s watchdog and the USB ring's slack.
+constexpr int kDecisionSweepsPerStep = 1;
+
 std::string poseText(const Pose2& q) {
   char text[96];
   std::snprintf(text, sizeof text, "(%.3f, %.3f, %.3f)", q.x, q.y, q.theta);
@@ -263,9 +268,12 @@ void RobotController::startExploring() {
   const ExploreLoop::Options& o = *options_.explore;
   ExploreLoop::Hooks hooks;
   hooks.whisked = [this](const Pose2& pose) { onWhisked(pose); };
+  // The draws take a slice of the chain's sweeps per control step: all at once they took
+  // 0.5-1 s late in a 20 m run (the Create's watchdog stopped it after every decision and the
+  // USB ring overflowed, docs/ROBOT.md).
   hooks.samples = [this, beta = o.explore.sample_beta, sweeps = o.explore.sample_sweeps](
                       int n, std::vector<MapSample>& out) {
-    session_.drawSamples(n, beta, sweeps, out);
+    return session_.continueSamples(n, beta, sweeps, out, kDecisionSweepsPerStep);
   };
   // No bump_point: the Create's bumper switches say only which side hit something (the loop
   // takes the expected point for those switches, robot/bumper.h).

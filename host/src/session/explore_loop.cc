@@ -158,9 +158,12 @@ Status ExploreLoop::decideAndPlan() {
     finish(why);
     return okStatus();
   }
-  samples_.clear();
+  if (!drawing_) samples_.clear();
   const int wanted = policy_.samplesWanted();
-  if (wanted > 0 && hooks_.samples) hooks_.samples(wanted, samples_);
+  if (wanted > 0 && hooks_.samples) {
+    drawing_ = !hooks_.samples(wanted, samples_);
+    if (drawing_) return okStatus();  // standing still; drawn on at the next update
+  }
   double ms = 0.0;
   const exploration::Decision d = exploration::decide(
       policy_, known_, options_.explore.planner, last_pose_, samples_, mounts_, model_, grid_,

@@ -153,6 +153,13 @@ class Sampler {
 
   // Runs the whole annealing schedule on the blackboard's current working memory.
   void anneal();
+  // The same schedule a sweep at a time, for a caller that cannot wait for all of it (the
+  // robot's control loop): annealSweep(k) for k = 0 .. annealSweeps() - 1 in order is anneal(),
+  // draw for draw (the temperature's pruning and hooks follow its last sweep).
+  int annealSweeps() const {
+    return static_cast<int>(betas_.size()) * opt_.sweeps_per_temperature;
+  }
+  void annealSweep(int k);
   // One pass of Algorithm 1's inner loop at inverse temperature beta (without pruning); under
   // Acceptance::kReversibleJump one sweep of sweepReversible instead.
   void sweep(double beta);

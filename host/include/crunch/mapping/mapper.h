@@ -82,6 +82,14 @@ class Mapper {
   // maps the same per-pose MAPs as one that does not. No draws (out unchanged) before any
   // shapelet.
   void drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out);
+  // The same draws spread over calls, for a caller that must not wait for all of them (the
+  // robot's control loop: a stall of 0.5 s stops the Create and fills the USB ring). Each call
+  // runs at most `max_sweeps` of the chain's sweeps (annealing and between draws) and appends
+  // the draws completed; true once `n` draws have been appended since the first call of this
+  // request (then the next call starts a new one). Called until true with the same arguments,
+  // it makes exactly drawSamples' draws. Shapelets sensed during a request join the next.
+  bool continueSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out,
+                       int max_sweeps);
 
   int poses() const { return pose_count_; }
   const std::vector<WhiskerMount>& mounts() const { return mounts_; }
@@ -108,6 +116,14 @@ class Mapper {
   std::unique_ptr<Blackboard> sample_board_;
   std::unique_ptr<Sampler> sample_sampler_;
   std::size_t sample_fed_ = 0;
+  // continueSamples' request in progress (active): the annealing's next sweep (anneal_next of
+  // anneal_total), the draws made, and the sweeps made toward the next draw.
+  struct SampleRequest {
+    bool active = false;
+    int anneal_next = 0, anneal_total = 0;
+    int drawn = 0, between = 0;
+  } request_;
+  void drawOne(std::vector<MapSample>& out);
 };
 
 // The cells of `grid` that at least one free whisker sample passed through (Map::free_space),

@@ -74,8 +74,11 @@ class ExploreLoop {
   struct Hooks {
     // A whisk finished; `pose` is where it began. The caller senses, maps, updates the KnownSpace.
     std::function<void(const Pose2& pose)> whisked;
-    // n posterior draws for the policy (when it wants any); unset: none.
-    std::function<void(int n, std::vector<MapSample>& out)> samples;
+    // n posterior draws for the policy (when it wants any), appended to `out`; unset: none.
+    // Returns false while the draws are not all made yet: the loop stands still and calls it
+    // again, with the same `out`, at each update until it returns true (the robot's control
+    // loop draws a slice per step and so never stalls; the simulator draws all at once).
+    std::function<bool(int n, std::vector<MapSample>& out)> samples;
     // Where the body hit, if the base can tell (the simulator knows the obstacle; the Create's
     // bumpers say only left/right). Unset or nullopt: from base.bumper() (robot/bumper.h).
     std::function<std::optional<Vec2>(const Pose2& pose)> bump_point;
@@ -143,6 +146,7 @@ class ExploreLoop {
   double start_time_ = 0.0;
   std::vector<Vec2> touches_;
   std::vector<MapSample> samples_;
+  bool drawing_ = false;  // the samples hook is still drawing this decision's samples
   bool sent_ = false;
   bool bump_whisk_ = false;  // the bump was at a new place: whisk there once backed off
   double escape_heading_ = 0.0;  // the back-off: face this heading, then reverse

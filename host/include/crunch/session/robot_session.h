@@ -126,6 +126,11 @@ class RobotSession {
   void drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out) {
     mapper_.drawSamples(n, beta, sweeps_between, out);
   }
+  // The same a slice at a time (Mapper::continueSamples): true once the n draws are in `out`.
+  bool continueSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out,
+                       int max_sweeps) {
+    return mapper_.continueSamples(n, beta, sweeps_between, out, max_sweeps);
+  }
   // The rays the whiskers swept free during the last whisk handed to the mapper.
   const std::vector<FreeRay>& lastFreeRays() const { return free_rays_; }
   // The contact reports of the last whisk handed to the mapper (the CSV export's contacts).
