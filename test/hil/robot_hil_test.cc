@@ -133,10 +133,10 @@ const crunch::MatchTolerance kTableTolerance{0.05, 5.0 * crunch::kPi / 180.0};
 // The one table: 330 s. The two tables: the travel the simulator's stand-in needed (`crunchhost
 // --sim --sensor-model physics --model rooms --explore infogain --travel-budget 20` on
 // hil_two_tables: recall and precision 1.0 on seeds 1-6, where 10 m gave 0.67 and 0.75;
-// docs/EXPLORATION.md), 20 minutes of the robot's time (1,186 s, 91 whisks, 31 bumps on
-// 2026-11-28, 29 of the bumps in one gap between two legs), capped at 25. Measured then: the
-// standard table within 1.6 cm, not the small one (docs/ROBOT.md): the two-table item of issue
-// 12 is still open.
+// docs/EXPLORATION.md), about 20 minutes of the robot's time, capped at 25. Measured on
+// 2026-11-28 (docs/ROBOT.md, "Maps in the virtual robot"): before the bumper's switches were
+// read, 31 bumps and the small table never fused; after, 8 bumps and both tables within
+// 1.2 cm and 1.1 degrees (1,160 s, 91 whisks).
 constexpr int kOneTableSeconds = 330;
 constexpr double kTwoTablesMetres = 20.0;
 constexpr int kTwoTablesCapSeconds = 1500;
