@@ -358,6 +358,7 @@ int driveRobot(const RobotOptions& opt, const RobotPlan& p, RobotSession& sessio
 
   // ---- Shut down in order: motors, USB, the last chunks, the recording, the map.
   controller.stopMotion();
+  (void)d.create->stopAndDisarm();  // stopped: the final inference below polls nothing
   const json last_status = view ? status_now() : json();  // for the view's last snapshot
   writer.reset();  // waits for a write in progress; the final map is written below
   d.usb->stop();

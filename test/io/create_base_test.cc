@@ -266,6 +266,30 @@ TEST_CASE("CreateBase: the watchdog stops a stalled control loop", "[io][create]
   CHECK(waited < 0.6);
 }
 
+TEST_CASE("CreateBase: stopAndDisarm stops the motors and ends the watchdog", "[io][create][pty]") {
+  // After the run (crunchhost --robot's shut-down) the final inference polls nothing for
+  // seconds; the robot is already stopped, and that is not a stalled control loop.
+  Robot robot;
+  CreateBase::Options options;
+  options.watchdog_s = 0.2;
+  auto base = openBase(robot, options);
+  REQUIRE(base->drive(0.2, 0.0).ok());
+  const auto moving = [&] {
+    return robot.with([](KinematicBase& b, CreateEmulator&) { return b.commandedV() != 0.0; });
+  };
+  REQUIRE(pollUntil(*base, 0.1, moving));
+  REQUIRE(base->stopAndDisarm().ok());
+  const auto t0 = Clock::now();
+  while (moving() && Clock::now() - t0 < std::chrono::seconds(2)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  CHECK_FALSE(moving());
+  // Three watchdog periods without a poll or a command: nothing counted.
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));
+  CHECK(base->watchdogStops() == 0);
+  CHECK(base->stopAndDisarm().ok());  // twice is harmless
+}
+
 TEST_CASE("CreateBase: a Create that never answers gives a clear error in bounded time",
           "[io][create][pty]") {
   Robot robot;

@@ -88,14 +88,7 @@ Result<std::unique_ptr<CreateBase>> CreateBase::open(const std::string& device,
 }
 
 CreateBase::~CreateBase() {
-  if (watchdog_.joinable()) {
-    {
-      std::lock_guard lock(watchdog_mutex_);
-      quit_ = true;
-    }
-    watchdog_cv_.notify_all();
-    watchdog_.join();
-  }
+  (void)stopAndDisarm();
   if (port_.isOpen()) {
     (void)sendWheels(0, 0);
     const auto pause = oi::pauseResume(false);
@@ -201,6 +194,18 @@ Status CreateBase::poll(double timeout_s) {
                  " malformed): is it still switched on and connected?"};
   }
   return okStatus();
+}
+
+Status CreateBase::stopAndDisarm() {
+  if (watchdog_.joinable()) {
+    {
+      std::lock_guard lock(watchdog_mutex_);
+      quit_ = true;
+    }
+    watchdog_cv_.notify_all();
+    watchdog_.join();
+  }
+  return port_.isOpen() ? sendWheels(0, 0) : okStatus();
 }
 
 void CreateBase::watchdogLoop() {

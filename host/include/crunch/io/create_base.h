@@ -93,6 +93,10 @@ class CreateBase final : public MobileBase {
   const oi::SensorTracker& sensors() const { return tracker_; }
   const CreateBaseCounters& counters() const { return counters_; }
   std::uint64_t watchdogStops() const { return watchdog_stops_.load(); }
+  // The run is over: stops the motors and ends the watchdog, so the work after the run (the
+  // final map's inference, which polls nothing) is not counted as a stalled loop. Later
+  // commands still reach the Create, unwatched.
+  Status stopAndDisarm();
   const std::string& device() const { return port_.device(); }
   const Options& options() const { return options_; }
 
