@@ -368,7 +368,7 @@ void WhiskeredRobot::moveBase(double h) {
   setBaseBodies(v, omega, h);
   pose_ = next;
   // Where the body ends, if not where the bumper was felt above.
-  bumper_ = pressed != Bumper::kReleased ? pressed : refused ? frontBumper(pose_) : Bumper::kReleased;
+  bumper_ = pressed != Bumper::kReleased || !refused ? pressed : frontBumper(pose_);
 }
 
 Bumper WhiskeredRobot::frontBumper(const Pose2& p) const {

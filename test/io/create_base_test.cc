@@ -86,6 +86,21 @@ bool pollUntil(CreateBase& base, double timeout_s, const std::function<bool()>& 
   return false;
 }
 
+// The emulated body's wheels are commanded to move (the emulator's side, not the driver's).
+bool bodyMoving(Robot& robot) {
+  return robot.with([](KinematicBase& b, CreateEmulator&) { return b.commandedV() != 0.0; });
+}
+
+// Waits while the body moves, polling nothing (a stalled control loop), at most 2 s; returns the
+// seconds waited.
+double waitWhileMoving(Robot& robot) {
+  const auto t0 = Clock::now();
+  while (bodyMoving(robot) && Clock::now() - t0 < std::chrono::seconds(2)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
 std::unique_ptr<CreateBase> openBase(const Robot& robot, CreateBase::Options options = {}) {
   auto base = CreateBase::open(robot.path(), options);
   INFO((base.ok() ? std::string() : base.error().message));
@@ -248,19 +263,11 @@ TEST_CASE("CreateBase: the watchdog stops a stalled control loop", "[io][create]
   options.watchdog_s = 0.2;
   auto base = openBase(robot, options);
   REQUIRE(base->drive(0.2, 0.0).ok());
-  const auto moving = [&] {
-    return robot.with([](KinematicBase& b, CreateEmulator&) { return b.commandedV() > 0.0; });
-  };
-  REQUIRE(pollUntil(*base, 0.1, moving));
+  REQUIRE(pollUntil(*base, 0.1, [&] { return bodyMoving(robot); }));
   // Stall: no poll(), no drive(). Wait on the condition with a bounded deadline.
-  const auto stalled_at = Clock::now();
-  const auto deadline = stalled_at + std::chrono::seconds(2);
-  while (moving() && Clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  const double waited = std::chrono::duration<double>(Clock::now() - stalled_at).count();
+  const double waited = waitWhileMoving(robot);
   std::printf("create watchdog: stopped %.3f s after the loop stalled (watchdog_s 0.2)\n", waited);
-  CHECK_FALSE(moving());
+  CHECK_FALSE(bodyMoving(robot));
   CHECK(base->watchdogStops() == 1);
   CHECK(waited > 0.15);  // not before the stall limit (the last poll may predate stalled_at)
   CHECK(waited < 0.6);
@@ -274,16 +281,10 @@ TEST_CASE("CreateBase: stopAndDisarm stops the motors and ends the watchdog", "[
   options.watchdog_s = 0.2;
   auto base = openBase(robot, options);
   REQUIRE(base->drive(0.2, 0.0).ok());
-  const auto moving = [&] {
-    return robot.with([](KinematicBase& b, CreateEmulator&) { return b.commandedV() != 0.0; });
-  };
-  REQUIRE(pollUntil(*base, 0.1, moving));
+  REQUIRE(pollUntil(*base, 0.1, [&] { return bodyMoving(robot); }));
   REQUIRE(base->stopAndDisarm().ok());
-  const auto t0 = Clock::now();
-  while (moving() && Clock::now() - t0 < std::chrono::seconds(2)) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  CHECK_FALSE(moving());
+  (void)waitWhileMoving(robot);
+  CHECK_FALSE(bodyMoving(robot));
   // Three watchdog periods without a poll or a command: nothing counted.
   std::this_thread::sleep_for(std::chrono::milliseconds(600));
   CHECK(base->watchdogStops() == 0);

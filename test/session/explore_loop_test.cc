@@ -57,6 +57,15 @@ Scene room(std::vector<TableSpec> tables = {}) {
   return s;
 }
 
+// A table whose leg at (2.0, ~1.69) has its face 15 mm inside the path of a body driving along
+// y = 1.5 (the start (0.5, 1.5) to the goal (3.5, 1.5)): a leg grazed at the body's left side.
+Scene grazedLegRoom() {
+  TableSpec t;
+  const Vec2 leg{2.0, 1.5 + kRobotRadius + 0.5 * t.leg - 0.015};
+  t.pose = {leg.x() + 0.5 * (t.width - t.leg), leg.y() + 0.5 * (t.depth - t.leg), 0.0};
+  return room({t});
+}
+
 // Steps the loop and base until the loop finishes or `limit` simulated seconds pass.
 void run(ExploreLoop& loop, sim::KinematicBase& base, double limit) {
   while (!loop.finished() && base.now() < limit) {
@@ -165,11 +174,7 @@ TEST_CASE("ExploreLoop: a robot boxed in ends the run cleanly and says why", "[s
 TEST_CASE("ExploreLoop: a leg grazed at the side: the robot turns to face the bump, backs away "
           "from it and whisks it, once",
           "[session]") {
-  // A leg whose face is 15 mm inside the body's path, beside the straight line to the goal.
-  TableSpec t;
-  const Vec2 leg{2.0, 1.5 + kRobotRadius + 0.5 * t.leg - 0.015};
-  t.pose = {leg.x() + 0.5 * (t.width - t.leg), leg.y() + 0.5 * (t.depth - t.leg), 0.0};
-  const Scene scene = room({t});
+  const Scene scene = grazedLegRoom();
   const auto world = sim::World::build(scene);
   sim::KinematicBase base(*world, {.start = {0.5, 1.5, 0.0}});
   KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
@@ -206,10 +211,7 @@ TEST_CASE("ExploreLoop: without a bump_point hook, the bumper's switches place t
   // The grazed leg of the test above, with only the base's bumper to go by (as on the Create):
   // the left switch puts the hit 41.5 degrees to the left on the rim (robot/bumper.h), about
   // 7 cm from the leg's corner, where the body's front on its heading would be 18 cm off.
-  TableSpec t;
-  const Vec2 leg{2.0, 1.5 + kRobotRadius + 0.5 * t.leg - 0.015};
-  t.pose = {leg.x() + 0.5 * (t.width - t.leg), leg.y() + 0.5 * (t.depth - t.leg), 0.0};
-  const Scene scene = room({t});
+  const Scene scene = grazedLegRoom();
   const auto world = sim::World::build(scene);
   sim::KinematicBase base(*world, {.start = {0.5, 1.5, 0.0}});
   KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);

@@ -88,9 +88,8 @@ Result<std::unique_ptr<CreateBase>> CreateBase::open(const std::string& device,
 }
 
 CreateBase::~CreateBase() {
-  (void)stopAndDisarm();
+  (void)stopAndDisarm();  // the motors' stop, once
   if (port_.isOpen()) {
-    (void)sendWheels(0, 0);
     const auto pause = oi::pauseResume(false);
     (void)send(pause);
   }

@@ -11,8 +11,8 @@
 // clock by dt, ramps the wheels over dt, and moves the body along the exact arc of the wheel
 // speeds then in effect; if the new pose collides, the move is refused (the body stays put) and
 // bumped() turns true, with bumper() the switches a hit at the bearing of the nearest wall or leg
-// point would close (robot/bumper.h); it turns false again at the next step that moves the body. odometry() is
-// the true pose (this base has no wheel slip). The options must be valid
+// point would close (robot/bumper.h); it turns false again at the next step that moves the
+// body. odometry() is the true pose (this base has no wheel slip). The options must be valid
 // (DiffDrive::Options::validate; asserted).
 // Thread-safety: none. Allocation: none after construction.
 #pragma once

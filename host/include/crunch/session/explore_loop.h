@@ -16,10 +16,11 @@
 // `backoff` straight away from the bump point, facing it (turned in place first unless it is
 // within 30 degrees of ahead, as a hit that closes both switches is), and, if the bump point is
 // touch_separation from every touch and bump acted on before, whisk in place there (a touch
-// whisk: the whiskers locate what the bumper only felt, so the next plan goes round it); then replan to the same goal (a new decision if it is now
-// unreachable, or after max_bumps_per_goal bumps on the way to it within touch_separation of a
-// touch or bump before: the switches give the side, not the point, so an object can bump again;
-// a bump at a new place is a new obstacle, marked, and does not count).
+// whisk: the whiskers locate what the bumper only felt, so the next plan goes round it); then
+// replan to the same goal (a new decision if it is now unreachable, or after max_bumps_per_goal
+// bumps on the way to it within touch_separation of a touch or bump before: the switches give
+// the side, not the point, so an object can bump again; a bump at a new place is a new
+// obstacle, marked, and does not count).
 // A whisker touching while driving (update's contact mask): if the touch is at least
 // touch_separation from every occupied cell of the KnownSpace and every touch acted on before,
 // stop and whisk in place there (new evidence, reported like any whisk), then replan to the goal;
