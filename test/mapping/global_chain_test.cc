@@ -3,6 +3,7 @@
 #include "crunch/mapping/global_chain.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <vector>
 
 #include "blackboard/test_builders.h"
@@ -106,4 +107,40 @@ TEST_CASE("GlobalChain: the per-pose hooks are not called by a global chain", "[
   const ChainResult r = runOne(threeTables(o.model), o, globalChainStreams(o.seed, 1)[0]);
   CHECK(r.proposals > 0);
   CHECK(calls == 0);
+}
+
+TEST_CASE("GlobalChain: under kRooms a kMarginal sample carries its table's own size",
+          "[mapping]") {
+  // A 0.45 m chair with 3 cm legs: samples written as the map writes tables (width >= depth,
+  // mapper.h's sizedTable), not at the paper's 0.80 x 0.50 m.
+  MappingOptions o = chainOptions();
+  o.chain_fusion = ChainFusion::kMarginal;
+  o.model.objects = ObjectModel::kRooms;
+  ModelParams chair = o.model;
+  chair.table_width = chair.table_depth = 0.45;
+  chair.leg_side = 0.03;
+  const Pose2 at{1.0, 1.0, 0.3};
+  std::vector<Shapelet> run;
+  for (int round = 0; round < 2; ++round)
+    for (const Shapelet& s : crunch::testing::TableShapelets(at, chair, {0, 1, 2, 3})) run.push_back(s);
+  // Whiskers swept under the chair between its legs, along both of its axes: without them four
+  // walls boxing the legs' outer faces explain the same shapelets.
+  FreeSpaceGrid free({0, 0}, {2, 2});
+  for (int pass = 0; pass < 3; ++pass) {
+    free.addRay({at.toWorld({-0.4, 0.0}), at.toWorld({0.4, 0.0})});
+    free.addRay({at.toWorld({0.0, -0.4}), at.toWorld({0.0, 0.4})});
+  }
+  GlobalChain chain(run, &free, o, globalChainStreams(o.seed, 1)[0]);
+  chain.anneal();
+  const ChainResult r = chain.result();
+  int near = 0;
+  for (const ObjectSample& s : r.samples) {
+    if (std::hypot(s.pose.x - at.x, s.pose.y - at.y) > 0.05) continue;
+    ++near;
+    CHECK(s.shape[0] >= s.shape[1]);
+    CHECK(s.shape[0] == Approx(0.45).margin(0.05));
+    CHECK(s.shape[1] == Approx(0.45).margin(0.05));
+    CHECK(s.shape[2] < 0.08);
+  }
+  CHECK(near > r.sample_count / 2);  // the chair is held in most samples
 }

@@ -25,8 +25,9 @@ SamplerOptions chainSampler(const MappingOptions& options, std::vector<ObjectSam
     for (int32_t id = 0; id < board.tableExtent(); ++id) {
       const TableHyp& t = board.table(id);
       if (!t.alive) continue;
-      const MapTable m = modelTable(t.pose, model);
-      samples.push_back({count, t.pose, {m.width, m.depth, m.leg}});
+      // Each table at its own size under kRooms, written width >= depth as the map writes it.
+      const MapTable m = model.sized() ? sizedTable(t) : modelTable(t.pose, model);
+      samples.push_back({count, m.pose, {m.width, m.depth, m.leg}});
     }
     ++count;
   };

@@ -25,7 +25,7 @@ void holdWholeRun(Blackboard& board, const Map& map, const FreeSpaceGrid* free) 
 void countSupport(std::vector<MapTable>& tables, const Map& map, const FuseOptions& fuse) {
   for (MapTable& t : tables)
     for (const PoseMap& pm : map.per_pose)
-      for (const MapTable& q : pm.tables) t.support += tablesAgree(q.pose, t.pose, fuse);
+      for (const MapTable& q : pm.tables) t.support += tablesAgree(q, t, fuse);
 }
 
 // The global inference's chains (global_chain.h), each annealed once, on options.threads threads:
@@ -57,18 +57,26 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
                                   const FreeSpaceGrid* free, uint64_t chain_seed) {
   std::vector<Rng> streams = globalChainStreams(chain_seed, std::max(1, options.global_chains));
   std::vector<ObjectSample> objects;
+  std::vector<std::vector<WallHyp>> chain_walls;  // none unless ModelParams::walled()
   int n_samples = 0;
-  for (const ChainResult& r : runChains(map, options, free, streams)) {
+  for (ChainResult& r : runChains(map, options, free, streams)) {
     for (ObjectSample o : r.samples) {
       o.sample += n_samples;  // numbered over the chains in chain order
       objects.push_back(o);
     }
     n_samples += r.sample_count;
+    if (options.model.walled()) chain_walls.push_back(std::move(r.walls));
   }
+  map.walls = fuseWalls(chain_walls);
   MarginalOptions mo;
   mo.radius = options.fuse.radius;
   mo.angle = options.fuse.angle;
   mo.angle_period = kPi;
+  if (options.model.sized()) {
+    // Tables of different sizes at one spot are different objects, as in the vote (FuseOptions).
+    mo.shape_tolerance = options.fuse.size;
+    mo.square_half_period = true;
+  }
   std::vector<MapTable> out;
   for (const MarginalObject& o : posteriorMarginals(objects, n_samples, mo)) {
     if (o.score <= options.marginal_keep) continue;

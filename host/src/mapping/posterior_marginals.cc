@@ -23,10 +23,17 @@ Status MarginalOptions::validate() const {
 
 namespace {
 
+// The period of a cluster's angles: half of angle_period for a near-square table.
+double periodOf(const std::array<double, 3>& shape, const MarginalOptions& opt) {
+  const bool square = opt.square_half_period && std::abs(shape[0] - shape[1]) <= opt.shape_tolerance;
+  return square ? opt.angle_period / 2 : opt.angle_period;
+}
+
 bool matches(const ObjectSample& a, const Pose2& centre, const std::array<double, 3>& shape,
              const MarginalOptions& opt) {
   if (std::hypot(a.pose.x - centre.x, a.pose.y - centre.y) > opt.radius) return false;
-  if (std::abs(wrapPeriod(a.pose.theta - centre.theta, opt.angle_period)) > opt.angle) return false;
+  if (std::abs(wrapPeriod(a.pose.theta - centre.theta, periodOf(shape, opt))) > opt.angle)
+    return false;
   for (size_t i = 0; i < shape.size(); ++i)
     if (std::abs(a.shape[i] - shape[i]) > opt.shape_tolerance) return false;
   return true;
@@ -115,7 +122,7 @@ std::vector<MarginalObject> posteriorMarginals(std::span<const ObjectSample> ite
     if (used[seed]) continue;
     const Centre at{items[seed].pose, items[seed].shape};
     gather(at, members);
-    const Centre centre = meanOf(items, members, opt.angle_period);
+    const Centre centre = meanOf(items, members, periodOf(at.shape, opt));
     gather(centre, refined);
     if (refined.size() >= members.size() && !refined.empty()) members.swap(refined);
     best.clear();
@@ -128,7 +135,7 @@ std::vector<MarginalObject> posteriorMarginals(std::span<const ObjectSample> ite
     one.reserve(best.size());
     for (const auto& kv : best) one.push_back(kv.second);
     std::sort(one.begin(), one.end());  // deterministic sums
-    const Centre mean = meanOf(items, one, opt.angle_period);
+    const Centre mean = meanOf(items, one, periodOf(centre.shape, opt));
     MarginalObject o;
     o.pose = mean.pose;
     o.shape = mean.shape;

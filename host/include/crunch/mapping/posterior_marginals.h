@@ -9,7 +9,8 @@
 // (table width/depth/leg, a wall's length: `shape`) within `shape_tolerance` each. A cluster's
 // score is the number of distinct samples with a member over the number of samples; its pose is
 // the mean of one member per sample (the member nearest the cluster's centre), angles averaged
-// on the circle of period angle_period. Generic over the object's kind: tables and walls use it
+// on the circle of period angle_period (half of it for near-square tables when
+// square_half_period). Generic over the object's kind: tables and walls use it
 // alike; what a kind forbids (two tables overlapping) is the caller's to resolve.
 //
 // Greedy clustering: items are taken as seeds in order of how many items match them (computed
@@ -37,6 +38,11 @@ struct MarginalOptions {
   double angle = 10.0 * kPi / 180.0;  // radians between matching angles (modulo angle_period)
   double angle_period = kPi;
   double shape_tolerance = 0.05;  // metres per shape entry
+  // Tables: an object whose first two shape entries (width, depth) differ by at most
+  // shape_tolerance is near-square, and its angle means the same turned by angle_period / 2 (a
+  // square chair at theta and at theta + pi/2 is one chair). Its cluster matches and averages
+  // angles modulo angle_period / 2. Off: every angle modulo angle_period.
+  bool square_half_period = false;
 
   // radius in (0, 10], angle in (0, pi], angle_period in (0, 2 pi], shape_tolerance in [0, 10].
   Status validate() const;
