@@ -132,12 +132,22 @@ TEST_CASE("MapIo: table thetas are written in 0 <= theta < pi", "[mapping]") {
 
 TEST_CASE("MapIo: the file names its schema, is indented by two and omits shapelets", "[mapping]") {
   const std::string text = crunch::mapToJson(sampleMap());
-  CHECK(text.rfind("{\n  \"schema\": \"crunch.map/1\",\n", 0) == 0);
+  CHECK(text.rfind("{\n  \"schema\": \"crunch.map/2\",\n", 0) == 0);
   for (const char* key : {"tables", "walls", "per_pose", "stats"}) {
     CHECK(text.find("\n  \"" + std::string(key) + "\": ") != std::string::npos);
   }
   CHECK(text.find("\n  \"shapelets\"") == std::string::npos);  // no top-level shapelet list
   CHECK(text.find("\"support\": 17") != std::string::npos);
+}
+
+TEST_CASE("MapIo: a crunch.map/1 file (scores from per-pose support) is still read", "[mapping]") {
+  const auto r = crunch::parseMapJson(
+      R"({"schema": "crunch.map/1", "tables": [{"x": 1, "y": 2, "theta": 0.5, "score": 0.25}]})",
+      "map.json");
+  INFO((r.ok() ? std::string() : r.error().message));
+  REQUIRE(r.ok());
+  REQUIRE(r.value().tables.size() == 1);
+  CHECK(r.value().tables[0].score == 0.25);
 }
 
 TEST_CASE("MapIo: an empty map round-trips", "[mapping]") {
@@ -188,7 +198,7 @@ TEST_CASE("MapIo: a bad map file is an error naming the file and the field", "[m
     return r.error().message;
   };
   CHECK(message(R"({"tables": []})") == "out/map.json: schema: missing (required)");
-  CHECK(message(R"({"schema": "crunch.map/2"})").rfind("out/map.json: schema: expected", 0) == 0);
+  CHECK(message(R"({"schema": "crunch.map/3"})").rfind("out/map.json: schema: expected", 0) == 0);
   CHECK(message(R"({"schema": "crunch.map/1", "tables": [{"x": 1, "y": "2", "theta": 0}]})") ==
         "out/map.json: tables[0].y: expected a number, got string");
   CHECK(message(R"({"schema": "crunch.map/1", "per_pose": [{"pose": [1, 2]}]})")

@@ -694,3 +694,28 @@ TEST_CASE("Mapper: a room bound rules out a table standing beyond the room's wal
   o.room = std::pair<Vec2, Vec2>{Vec2(0, std::nan("")), Vec2(1, 2)};
   CHECK_FALSE(o.validate());
 }
+
+TEST_CASE("Mapper: a fused table's score is the fraction of the chains that hold it",
+          "[mapping][mapper]") {
+  // ARCHITECTURE.md §4: a table's score is its posterior probability. The global chains' end
+  // states are draws of the posterior: the scripted table is in most of them, and the score
+  // counts chains (whole quarters of the four), not per-pose MAPs (which hold it at few poses).
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const Pose2 truth{1.5, 1.2, 0.3};
+  const ChainFusion fusion = GENERATE(ChainFusion::kVote, ChainFusion::kPool);
+  INFO("fusion " << chainFusionName(fusion));
+  MappingOptions o = options(1, 4);
+  o.chain_fusion = fusion;
+  const Map map = plainRun(mounts, script, o);
+  REQUIRE(tablesNear(map, truth) == 1);
+  for (const MapTable& t : map.tables) {
+    INFO("table " << t.pose.x << " " << t.pose.y << " score " << t.score);
+    const double chains = t.score * o.global_chains;
+    CHECK(chains == Approx(std::round(chains)));
+    CHECK(t.score <= 1.0);
+    if (std::hypot(t.pose.x - truth.x, t.pose.y - truth.y) < 0.05) CHECK(t.score >= 0.5);
+    // The vote keeps a table at least half the chains hold: its score says so.
+    if (fusion == ChainFusion::kVote) CHECK(t.score >= 0.5);
+  }
+}

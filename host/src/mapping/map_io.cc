@@ -235,8 +235,10 @@ Map parseMapDocument(const Json& doc) {
   expectObject(doc, "");
   const auto schema = doc.find("schema");
   if (schema == doc.end()) fail("schema", "missing (required)");
-  if (!schema->is_string() || schema->get<std::string>() != kMapSchema) {
-    fail("schema", std::string("expected \"") + kMapSchema + "\", got " + schema->dump());
+  if (!schema->is_string() ||
+      (schema->get<std::string>() != kMapSchema && schema->get<std::string>() != kMapSchemaV1)) {
+    fail("schema", std::string("expected \"") + kMapSchema + "\" or \"" + kMapSchemaV1 +
+                       "\", got " + schema->dump());
   }
 
   Map map;

@@ -94,6 +94,30 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
   return out;
 }
 
+// A global table's score (ARCHITECTURE.md §4: the posterior probability of that object): the
+// fraction of the independent chains whose end state holds it, each chain's end state a draw
+// from the annealed posterior; walls are scored the same way (wall_fusion.h). Under the vote,
+// `kept` are the vote's clusters (fuseTables over the chains, `support` = chain tables in the
+// cluster) and `out` the same tables in the same order; under the pool, `out` are the pooled
+// chain's tables and a chain holds one when it has a table that agrees (tablesAgree).
+void scoreByChains(std::vector<MapTable>& out, const std::vector<MapTable>& kept,
+                   const std::vector<PoseMap>& chains, const MappingOptions& options) {
+  const double n = static_cast<double>(std::max<size_t>(1, chains.size()));
+  const bool vote = options.chain_fusion == ChainFusion::kVote;
+  for (size_t i = 0; i < out.size(); ++i) {
+    int holding = 0;
+    if (vote) {
+      holding = kept[i].support;
+    } else {
+      for (const PoseMap& c : chains)
+        holding += std::any_of(c.tables.begin(), c.tables.end(), [&](const MapTable& q) {
+          return tablesAgree(q, out[i], options.fuse);
+        });
+    }
+    out[i].score = std::min(1.0, holding / n);
+  }
+}
+
 // `chain_seed`: the seed the chains' streams are split from (globalChainStreams).
 std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
                                 const FreeSpaceGrid* free, uint64_t chain_seed) {
@@ -158,7 +182,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
         for (const MapTable& q : pm.tables) t.support += tablesAgree(q, t, options.fuse);
       out.push_back(t);
     }
-    scoreBySupport(out, map.per_pose, options.fuse);
+    scoreByChains(out, kept, chains, options);
     return out;
   }
   for (const Pose2& p : poses) {
@@ -167,7 +191,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
       for (const MapTable& q : pm.tables) t.support += tablesAgree(q.pose, t.pose, options.fuse);
     out.push_back(t);
   }
-  scoreBySupport(out, map.per_pose, options.fuse);
+  scoreByChains(out, kept, chains, options);
   return out;
 }
 }  // namespace

@@ -17,7 +17,7 @@ struct MapTable {
   double width = kStandardTableWidth;
   double depth = kStandardTableDepth;
   double leg = kStandardLegSide;
-  double score = 0.0;  // fused map only: support, see mapping/fused_map.h
+  double score = 0.0;  // fused map only: posterior probability, see ChainFusion (mapping_options.h)
   int support = 0;     // fused map only: number of per-pose MAPs in the cluster
 };
 

@@ -10,7 +10,11 @@
 
 namespace crunch {
 
-inline constexpr const char* kMapSchema = "crunch.map/1";
+// /2 (issue 13): a fused table's `score` is its posterior probability (the fraction of the
+// global chains, or of the samples, holding it: ChainFusion in mapping_options.h), where /1 wrote
+// the fraction of per-pose MAPs that held it. Nothing else changed; /1 files are still read.
+inline constexpr const char* kMapSchema = "crunch.map/2";
+inline constexpr const char* kMapSchemaV1 = "crunch.map/1";
 
 // The map.json text of `map`: schema, fused tables (with the extra key "support"), walls,
 // per-pose MAPs and stats, pretty-printed with a 2-space indent. Table thetas (fused and
@@ -24,7 +28,7 @@ inline constexpr const char* kMapSchema = "crunch.map/1";
 std::string mapToJson(const Map& map);
 
 // Reads map.json text back. `source` names the file in errors, which read
-// "<source>: <field path>: <what is wrong>". "schema" must be kMapSchema; the sections tables,
+// "<source>: <field path>: <what is wrong>". "schema" must be kMapSchema or kMapSchemaV1; the sections tables,
 // walls, per_pose and stats may be absent (empty); a table needs x, y, theta, a wall its four
 // coordinates, a per-pose entry its pose. Other fields default as in map.h. Unknown keys are
 // ignored (the contract allows extra keys). "free_space" is optional (files before issue 17 have

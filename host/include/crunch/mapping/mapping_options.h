@@ -17,7 +17,10 @@
 namespace crunch {
 
 // How the global inference's chains become the fused map (docs/BLACKBOARD.md, "Fusing the
-// chains").
+// chains"). Under kVote and kPool a fused table's score is the fraction of the independent
+// chains whose end state holds a matching table (tablesAgree), as a wall's is; under kMarginal
+// the fraction of samples. Without the global inference (global_sweeps 0) it is the per-pose
+// support fraction of fused_map.h.
 enum class ChainFusion {
   // A table at least half the chains agree on. With the paper's classifier a wall's contact
   // looks like a leg's face, so the model (which has no walls yet) explains walls by phantom
