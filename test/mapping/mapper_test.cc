@@ -430,6 +430,21 @@ TEST_CASE("Mapper: threads is validated, 0 meaning one per core", "[mapping][map
   }
 }
 
+TEST_CASE("MappingOptions: rj acceptance only with the paper's model", "[mapping]") {
+  // Sampler::sweepReversible has no wall or size moves: under the walls or rooms model rj would
+  // map neither, so the combination is refused rather than run as the paper's model.
+  MappingOptions o;
+  o.sampler.acceptance = Acceptance::kReversibleJump;
+  CHECK(o.validate());
+  for (const ObjectModel m : {ObjectModel::kWalls, ObjectModel::kRooms}) {
+    o.model.objects = m;
+    REQUIRE_FALSE(o.validate());
+    CHECK(o.validate().error().message.find("acceptance") != std::string::npos);
+  }
+  o.sampler.acceptance = Acceptance::kLiteral;
+  CHECK(o.validate());
+}
+
 TEST_CASE("Mapper: a run without shapelets has no live hypotheses", "[mapping][mapper]") {
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
   Mapper mapper(mounts, {-1, -1}, {3, 3}, options(1, 4));

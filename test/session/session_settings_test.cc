@@ -35,7 +35,8 @@ session::RobotSessionOptions unusualOptions() {
   m.global_chains = 3;
   m.chain_fusion = ChainFusion::kMarginal;  // not the session's default (the vote)
   m.marginal_steps = 3;
-  m.sampler.acceptance = Acceptance::kReversibleJump;
+  // Not the default (the paper's Gibbs conditional); rj is refused with the rooms model.
+  m.sampler.acceptance = Acceptance::kLiteral;
   m.model.objects = ObjectModel::kRooms;  // not the default (the paper's)
   session::RobotSessionOptions s = session::sessionOptions(shippedModels(), m, 42);
   s.start = {0.3, 0.775, -0.25};
@@ -89,7 +90,7 @@ TEST_CASE("Session settings: metadata written and read back gives the same optio
   CHECK(s.mapping.global_chains == 3);
   CHECK(s.mapping.chain_fusion == ChainFusion::kMarginal);
   CHECK(s.mapping.marginal_steps == 3);
-  CHECK(s.mapping.sampler.acceptance == Acceptance::kReversibleJump);
+  CHECK(s.mapping.sampler.acceptance == Acceptance::kLiteral);
   CHECK(s.mapping.model.objects == ObjectModel::kRooms);
   CHECK(s.mapping.model.sigma_r_shapelet == want.mapping.model.sigma_r_shapelet);
   CHECK(s.mapping.model.sigma_theta_shapelet == want.mapping.model.sigma_theta_shapelet);
@@ -116,7 +117,7 @@ TEST_CASE("Session settings: the metadata keeps the recording format's keys", "[
   CHECK(st["mapping"]["room_bounds"] == true);
   CHECK(st["mapping"]["chain_fusion"] == "marginal");
   CHECK(st["mapping"]["marginal_steps"] == 3);
-  CHECK(st["mapping"]["acceptance"] == "rj");
+  CHECK(st["mapping"]["acceptance"] == "literal");
   CHECK(st["mapping"]["model"] == "rooms");
 }
 
@@ -134,6 +135,10 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
   }
   SECTION("working_memory not a whole number") {
     CHECK(errorOf(withSetting(good, "mapping.working_memory", 7.5)).find("working_memory") !=
+          std::string::npos);
+  }
+  SECTION("rj acceptance with the rooms model (rj has no wall or size moves yet)") {
+    CHECK(errorOf(withSetting(good, "mapping.acceptance", "rj")).find("acceptance") !=
           std::string::npos);
   }
   SECTION("an area of 1e308 m") {

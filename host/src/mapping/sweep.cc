@@ -471,7 +471,8 @@ Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec) {
                             mapping_defaults.working_memory, g.working_memory); !s)
     return s.error();
   // Every grid value through the library's own validation (one road in), named by its option
-  // (each axis varies one field of MappingOptions, so checking each value checks every point).
+  // (each axis varies one field of MappingOptions, so checking each value checks every point;
+  // the acceptance, which is valid only with some models, is checked with each model below).
   auto check = [](const std::string& option, const auto& values, auto set) -> Status {
     for (const int v : values) {
       MappingOptions mo;
@@ -502,6 +503,13 @@ Result<SweepGrid> buildSweepGrid(const SweepGridSpec& spec) {
     const auto a = acceptanceByName(spec.acceptance);
     if (!a) return Error{"--acceptance: " + a.error().message};
     g.acceptance = a.value();
+  }
+  // The one setting checked against another axis: the acceptance with each object model.
+  for (const ObjectModel m : g.models) {
+    MappingOptions mo;
+    mo.model.objects = m;
+    mo.sampler.acceptance = g.acceptance;
+    if (auto s = mo.validate(); !s) return Error{"--acceptance: " + s.error().message};
   }
   constexpr size_t kMaxGrid = 10'000'000;
   if (g.size() > kMaxGrid) return Error{"sweep: the grid has more than 10^7 points"};

@@ -28,13 +28,13 @@ inline constexpr const char* kMapSchemaV1 = "crunch.map/1";
 std::string mapToJson(const Map& map);
 
 // Reads map.json text back. `source` names the file in errors, which read
-// "<source>: <field path>: <what is wrong>". "schema" must be kMapSchema or kMapSchemaV1; the sections tables,
-// walls, per_pose and stats may be absent (empty); a table needs x, y, theta, a wall its four
-// coordinates, a per-pose entry its pose. Other fields default as in map.h. Unknown keys are
-// ignored (the contract allows extra keys). "free_space" is optional (files before issue 17 have
-// none: the result's free_space is empty); when present it is checked whole (a run outside its
-// row, overlapping runs, rows not matching size: an error naming free_space.rows[i]). The result
-// has no shapelets.
+// "<source>: <field path>: <what is wrong>". "schema" must be kMapSchema or kMapSchemaV1; the
+// sections tables, walls, per_pose and stats may be absent (empty); a table needs x, y, theta, a
+// wall its four coordinates, a per-pose entry its pose. Other fields default as in map.h. Unknown
+// keys are ignored (the contract allows extra keys). "free_space" is optional (files before
+// issue 17 have none: the result's free_space is empty); when present it is checked whole (a run
+// outside its row, overlapping runs, rows not matching size: an error naming
+// free_space.rows[i]). The result has no shapelets.
 Result<Map> parseMapJson(const std::string& text, const std::string& source);
 
 }  // namespace crunch

@@ -17,10 +17,11 @@
 namespace crunch {
 
 // How the global inference's chains become the fused map (docs/BLACKBOARD.md, "Fusing the
-// chains"). Under kVote and kPool a fused table's score is the fraction of the independent
-// chains whose end state holds a matching table (tablesAgree), as a wall's is; under kMarginal
-// the fraction of samples. Without the global inference (global_sweeps 0) it is the per-pose
-// support fraction of fused_map.h.
+// chains"). A fused table's score is its posterior probability as the chains estimate it, as a
+// wall's is: under kVote the fraction of the chains in its cluster (>= 0.5 for every kept
+// table), under kPool the fraction of the chains holding a table that agrees with the pooled
+// one (tablesAgree), under kMarginal the fraction of samples. Without the global inference
+// (global_sweeps 0) it is the per-pose support fraction of fused_map.h.
 enum class ChainFusion {
   // A table at least half the chains agree on. With the paper's classifier a wall's contact
   // looks like a leg's face, so the model (which has no walls yet) explains walls by phantom
@@ -91,7 +92,9 @@ struct MappingOptions {
   // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
   // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256,
   // threads 0..256, pool_steps and marginal_steps 1..sampler.schedule_steps, marginal_keep in
-  // [0, 1).
+  // [0, 1), and the reversible-jump acceptance only with the paper's model: its move set
+  // (Sampler::sweepReversible) has no wall moves and no size moves yet, so under the walls or
+  // rooms model it would map neither walls nor sizes while the run said it did.
   // okStatus(), or an Error naming the first bad field. runMapping and session::RobotSession
   // call it; a Mapper must be given valid options.
   Status validate() const;
