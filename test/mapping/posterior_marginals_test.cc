@@ -4,6 +4,7 @@
 #include "crunch/mapping/posterior_marginals.h"
 
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <vector>
 
 using namespace crunch;
