@@ -108,6 +108,16 @@ std::unique_ptr<CreateBase> openBase(const Robot& robot, CreateBase::Options opt
   return std::move(base).value();
 }
 
+// A base with a 0.2 s watchdog whose robot is driving at 0.2 m/s (the body already moving).
+std::unique_ptr<CreateBase> drivingBase(Robot& robot) {
+  CreateBase::Options options;
+  options.watchdog_s = 0.2;
+  auto base = openBase(robot, options);
+  REQUIRE(base->drive(0.2, 0.0).ok());
+  REQUIRE(pollUntil(*base, 0.1, [&] { return bodyMoving(robot); }));
+  return base;
+}
+
 // Drive 0.3 m, turn +90 degrees, drive 0.3 m, closed loop on the driver's odometry; then stop
 // and wait until the last motion is reported. Optionally calls `during` every loop.
 void driveTurnDrive(CreateBase& base, Robot& robot, const std::function<void(int)>& during = {}) {
@@ -259,11 +269,7 @@ TEST_CASE("CreateBase: the bumper's switches arrive as packet 7's bits", "[io][c
 
 TEST_CASE("CreateBase: the watchdog stops a stalled control loop", "[io][create][pty]") {
   Robot robot;
-  CreateBase::Options options;
-  options.watchdog_s = 0.2;
-  auto base = openBase(robot, options);
-  REQUIRE(base->drive(0.2, 0.0).ok());
-  REQUIRE(pollUntil(*base, 0.1, [&] { return bodyMoving(robot); }));
+  auto base = drivingBase(robot);
   // Stall: no poll(), no drive(). Wait on the condition with a bounded deadline.
   const double waited = waitWhileMoving(robot);
   std::printf("create watchdog: stopped %.3f s after the loop stalled (watchdog_s 0.2)\n", waited);
@@ -277,11 +283,7 @@ TEST_CASE("CreateBase: stopAndDisarm stops the motors and ends the watchdog", "[
   // After the run (crunchhost --robot's shut-down) the final inference polls nothing for
   // seconds; the robot is already stopped, and that is not a stalled control loop.
   Robot robot;
-  CreateBase::Options options;
-  options.watchdog_s = 0.2;
-  auto base = openBase(robot, options);
-  REQUIRE(base->drive(0.2, 0.0).ok());
-  REQUIRE(pollUntil(*base, 0.1, [&] { return bodyMoving(robot); }));
+  auto base = drivingBase(robot);
   REQUIRE(base->stopAndDisarm().ok());
   (void)waitWhileMoving(robot);
   CHECK_FALSE(bodyMoving(robot));
