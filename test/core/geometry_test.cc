@@ -61,3 +61,38 @@ TEST_CASE("Geometry: wrapHalfTurn maps any angle to 0 <= a < pi", "[core]") {
     REQUIRE(near(a - h, k * kPi, 1e-9));
   }
 }
+
+TEST_CASE("Geometry: fitRigid recovers a rigid frame and is the least-squares one", "[core]") {
+  const Vec2 local[4] = {{0.375, 0.225}, {-0.375, 0.225}, {-0.375, -0.225}, {0.375, -0.225}};
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-3.0, 3.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Pose2 truth{u(rng), u(rng), wrapPeriod(u(rng), 2.0 * kPi)};
+    Vec2 world[4];
+    for (int i = 0; i < 4; ++i) world[i] = truth.toWorld(local[i]);
+    for (int n = 2; n <= 4; ++n) {
+      const Pose2 f = fitRigid(local, world, n, 0.0);
+      REQUIRE(near(f.x, truth.x, 1e-9));
+      REQUIRE(near(f.y, truth.y, 1e-9));
+      REQUIRE(near(wrapPi(f.theta - truth.theta), 0.0, 1e-9));
+    }
+  }
+  // Noisy points: no small turn or shift of the fit lowers the squared error.
+  std::normal_distribution<double> g(0.0, 0.02);
+  Vec2 world[4];
+  const Pose2 truth{1.0, 2.0, 0.7};
+  for (int i = 0; i < 4; ++i) world[i] = truth.toWorld(local[i]) + Vec2{g(rng), g(rng)};
+  auto err = [&](const Pose2& f) {
+    double e = 0.0;
+    for (int i = 0; i < 4; ++i) e += (f.toWorld(local[i]) - world[i]).squaredNorm();
+    return e;
+  };
+  const Pose2 f = fitRigid(local, world, 4, 0.0);
+  for (const Pose2& d : {Pose2{1e-3, 0, 0}, Pose2{-1e-3, 0, 0}, Pose2{0, 1e-3, 0},
+                         Pose2{0, -1e-3, 0}, Pose2{0, 0, 1e-3}, Pose2{0, 0, -1e-3}})
+    CHECK(err(f) < err({f.x + d.x, f.y + d.y, f.theta + d.theta}));
+  // One point: the given angle, the point carried onto the point.
+  const Pose2 one = fitRigid(local, world, 1, 0.4);
+  CHECK(near(one.theta, 0.4));
+  CHECK(near((one.toWorld(local[0]) - world[0]).norm(), 0.0, 1e-12));
+}

@@ -637,23 +637,42 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   double u = rng_.uniform() * total;
   int k = 0;
   while (k < 7 && (u -= weight[static_cast<size_t>(k)]) >= 0.0) ++k;
-  const Pose2 pose = place[static_cast<size_t>(k)];
+  Pose2 pose = place[static_cast<size_t>(k)];
 
   // Legs already at the other corners join the new table in the same move, taken from their
   // old table if they had one; an old table left without legs dies in the same move. This is the
   // jump between the rival tables T1 and T2 of Fig. 5, which single-hypothesis moves can only
   // make through a deep valley of two overlapping tables.
   IdSet<4> adopt;
+  // The corners' offsets and the legs' centres of the new table's legs, the proposer's first.
+  std::array<Vec2, 5> local, at;
+  local[0] = p.cornerOffset(k % 4);
+  at[0] = l.pose.position();
   if (opt_.smart_parent) {
     for (int c = 0; c < 4; ++c) {
       const Vec2 corner =
           pose.toWorld(p.cornerOffset(c), cos_th[static_cast<size_t>(k / 4)], sin_th[static_cast<size_t>(k / 4)]);
       bb_.legsNear(corner, link_r, [&](int32_t o) {
         const LegHyp& ol = bb_.leg(o);
-        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= link_r2)
+        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= link_r2 &&
+            !adopt.contains(o) && adopt.n < 4) {
           adopt.add(o);
+          local[static_cast<size_t>(adopt.n)] = p.cornerOffset(c);
+          at[static_cast<size_t>(adopt.n)] = ol.pose.position();
+        }
       });
     }
+  }
+  // With legs at two or more corners the table goes where its corners fit them best (eq. 10's
+  // position term is a squared distance: the least-squares rigid fit is the table's most
+  // probable pose given its legs), not where the proposer's own corner and orientation put it:
+  // a leg's orientation comes from its few shapelets' and is the noisier. Not under the paper's
+  // model (no walls): there the fit mostly builds tables on the legs of wall contacts
+  // (docs/BLACKBOARD.md "Tables fitted to their legs"), and its figures stay the paper's.
+  const bool fitted = opt_.fit_parent && walls() && adopt.n > 0;
+  if (fitted) {
+    const Pose2 fit = fitRigid(local.data(), at.data(), adopt.n + 1, pose.theta);
+    pose = {fit.x, fit.y, wrapPeriod(fit.theta, kPi)};
   }
   std::array<int32_t, 4> adopt_parent;
   Touched t;
@@ -667,12 +686,18 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   // Every child of a touched table is touched too: a table that dies orphans them.
   for (int32_t tab : t.tables.span())
     for (int i = 0; i < bb_.table(tab).n_children; ++i) t.legs.add(bb_.table(tab).children[i]);
+  // A fitted table turns its legs to its axes (below): their shapelets' terms change too.
+  if (fitted) {
+    bb_.shapeletsNear(l.pose.position(), t.shapelets);
+    for (int32_t o : adopt.span()) bb_.shapeletsNear(bb_.leg(o).pose.position(), t.shapelets);
+  }
   begin();
   const double e0 = bb_.energyBefore(t);
   const int32_t table = bb_.addTable(pose);
   bb_.setParent(leg, table);
   for (int32_t o : adopt.span()) bb_.setParent(o, table);
-  if (decideNewTable(table, pose, free_turn ? Turn::kPointSupported : Turn::kNoLeg, t, e0, beta))
+  const Turn turn = fitted ? Turn::kAll : free_turn ? Turn::kPointSupported : Turn::kNoLeg;
+  if (decideNewTable(table, pose, turn, t, e0, beta))
     return;
   bb_.setParent(leg, l.parent);
   for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
@@ -1375,7 +1400,6 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   const bool point = opt_.smart_parent && pointSupported(c);
   const bool from_partners = point || (opt_.smart_parent && rng_.uniform() < 0.5);
   const double axis = from_partners ? axisFromLegs(c, leg, l.pose.theta) : l.pose.theta;
-  const Turn turn = from_partners ? Turn::kAll : Turn::kNoLeg;
   const Vec2 u{std::cos(axis), std::sin(axis)}, v{-std::sin(axis), std::cos(axis)};
   // Partners: other legs, and point contacts (they come before their legs), around the leg. One
   // on the leg's u axis at a side's span gives the table's side along u; one on its v axis the
@@ -1454,7 +1478,7 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   const double w = std::abs(sx) + l.side, d = std::abs(sy) + l.side;
   if (!std::isfinite(p.logSizePrior(w, d, l.side))) return;  // outside the prior: rejected
   const Vec2 centre = c + 0.5 * sx * u + 0.5 * sy * v;
-  const Pose2 pose{centre.x(), centre.y(), wrapPeriod(axis, kPi)};
+  Pose2 pose{centre.x(), centre.y(), wrapPeriod(axis, kPi)};
   // log_q_ratio is not computed for this move: its forward density is a mixture over the
   // partners found (and the prior draws where none is taken), and its reverse is a table death
   // together with the re-parenting of every adopted leg, which no single move proposes. The
@@ -1468,16 +1492,30 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   shape.depth = d;
   shape.leg = l.side;
   IdSet<4> adopt;
+  std::array<Vec2, 5> local, at;  // as proposeParent: corner offsets and leg centres
+  local[0] = pose.toLocal(c);
+  at[0] = c;
   if (opt_.smart_parent) {
     for (int corner_i = 0; corner_i < 4; ++corner_i) {
       const Vec2 corner = shape.corner(corner_i);
       bb_.legsNear(corner, r, [&](int32_t o) {
         const LegHyp& ol = bb_.leg(o);
-        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= r * r)
+        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= r * r &&
+            !adopt.contains(o) && adopt.n < 4) {
           adopt.add(o);
+          local[static_cast<size_t>(adopt.n)] = pose.toLocal(corner);
+          at[static_cast<size_t>(adopt.n)] = ol.pose.position();
+        }
       });
     }
   }
+  // As proposeParent: the table where its corners fit its legs best, its legs turned to it.
+  const bool fitted = opt_.fit_parent && adopt.n > 0;
+  if (fitted) {
+    const Pose2 fit = fitRigid(local.data(), at.data(), adopt.n + 1, pose.theta);
+    pose = {fit.x, fit.y, wrapPeriod(fit.theta, kPi)};
+  }
+  const Turn turn = (fitted || from_partners) ? Turn::kAll : Turn::kNoLeg;
   std::array<int32_t, 4> adopt_parent;
   std::array<double, 5> old_side;  // the seed leg's, then the adopted legs'
   Touched t;

@@ -76,6 +76,27 @@ double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
   return (p - (a + t * ab)).norm();
 }
 
+Pose2 fitRigid(const Vec2* local, const Vec2* world, int n, double theta) {
+  Vec2 lc{0.0, 0.0}, wc{0.0, 0.0};
+  for (int i = 0; i < n; ++i) {
+    lc += local[i];
+    wc += world[i];
+  }
+  lc /= std::max(n, 1);
+  wc /= std::max(n, 1);
+  double sc = 0.0, ss = 0.0, spread = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Vec2 a = local[i] - lc, b = world[i] - wc;
+    sc += a.dot(b);
+    ss += a.x() * b.y() - a.y() * b.x();
+    spread += a.squaredNorm();
+  }
+  const double th = spread > 0.0 ? std::atan2(ss, sc) : theta;
+  const double c = std::cos(th), s = std::sin(th);
+  const Vec2 t = wc - Vec2{c * lc.x() - s * lc.y(), s * lc.x() + c * lc.y()};
+  return {t.x(), t.y(), wrapPeriod(th, 2.0 * kPi)};
+}
+
 namespace {
 bool segmentsIntersect(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2) {
   auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };

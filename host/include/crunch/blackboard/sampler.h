@@ -77,6 +77,11 @@ struct SamplerOptions {
   bool smart_parent = true;
   // Each leg near another corner of a placement adds this to its weight (base weight 1).
   double smart_parent_gain = 8.0;
+  // With smart_parent, under the walls and rooms models (ModelParams::walled()): a table born
+  // with adopted legs takes the pose that fits its corners to its legs in least squares
+  // (fitRigid) instead of the proposer's corner and orientation, and turns its legs to its axes
+  // (docs/BLACKBOARD.md "Tables fitted to their legs"). The paper's model keeps its proposal.
+  bool fit_parent = true;
   bool prune = true;
   // Incremental energies (Blackboard::energyBefore): a move evaluates the terms it changes once,
   // after the move, taking the before side from the cache. Off: both sides afresh (the reference

@@ -118,4 +118,12 @@ double distanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b);
 // Smallest distance between a rectangle's boundary/interior and a segment (0 if they touch).
 double distanceRectSegment(const OrientedRect& r, const Vec2& a, const Vec2& b);
 
+// The rigid frame (rotation and translation, no scale) that best carries the points `local[i]`
+// (in the frame) onto `world[i]`, i < n, in least squares: argmin over poses F of
+// sum |F.toWorld(local[i]) - world[i]|^2 (2-D Procrustes, closed form: the centroids give the
+// translation, the summed cross and dot products of the centred pairs the angle). n >= 2 with
+// the local points not all equal; otherwise (nothing fixes the angle) the frame at angle
+// `theta` that carries the centroid onto the centroid. theta of the result in [0, 2 pi).
+Pose2 fitRigid(const Vec2* local, const Vec2* world, int n, double theta);
+
 }  // namespace crunch
