@@ -10,7 +10,7 @@
 #       (docs/RESULTS.md "Scale"; about 2 min), charts docs/img/results/scale*.png.
 #   (d) blackboard snapshots at pose 120 of the default arena, cold and hot.
 #   (e) models: --model paper,walls,rooms x --noise-scale 1,2,5 x schedule-steps 4,8,16 x seeds
-#       1-3 (81 runs): accuracy against cost per object model and each model against noise
+#       1-5 (135 runs): accuracy against cost per object model and each model against noise
 #       (docs/RESULTS.md "Object models"), docs/img/results/models/.
 #   (f) exploration (issue 14): sweep --explore grid,random,frontier,entropy,infogain x seeds 1-5
 #       on the built-in arena and every mapping scene of test/scenes/ (not bad_*, hil_*,
@@ -125,7 +125,7 @@ build/default/bench/scale_bench --chart "$IMG/scale"
 cp "$RAW/snap_cold/snapshot_120.png" "$IMG/snapshot_default_120.png"
 "$BIN" --sim --snapshot 120 --snapshot-temperature 0 --out "$RAW/snap_hot" >/dev/null
 cp "$RAW/snap_hot/snapshot_120.png" "$IMG/snapshot_default_120_hot.png"
-"$BIN" sweep --model paper,walls,rooms --noise-scale 1,2,5 --schedule-steps 4,8,16 --seeds 3 \
+"$BIN" sweep --model paper,walls,rooms --noise-scale 1,2,5 --schedule-steps 4,8,16 --seeds 5 \
     --jobs "$JOBS" --out "$RAW/models"
 "$BIN" sweep-chart --in "$RAW/models" --out "$IMG/models"
 cp "$RAW/models/sweep.csv" "$IMG/models/sweep.csv"
