@@ -111,6 +111,22 @@ struct SweepScope {
   SweepScope& operator=(const SweepScope&) = delete;
   Blackboard& bb;
 };
+
+// A born table's legs against its corners, for fitRigid: the proposer's pair first, then each
+// adopted leg's (the corner's offset in the table's frame, the leg's centre).
+struct CornerPairs {
+  std::array<Vec2, 5> local, at;
+  int n = 0;
+  void add(const Vec2& corner, const Vec2& centre) {
+    local[static_cast<size_t>(n)] = corner;
+    at[static_cast<size_t>(n++)] = centre;
+  }
+  // The table's pose that fits its corners to its legs in least squares, theta modulo pi.
+  Pose2 fit(double theta) const {
+    const Pose2 f = fitRigid(local.data(), at.data(), n, theta);
+    return {f.x, f.y, wrapPeriod(f.theta, kPi)};
+  }
+};
 }  // namespace
 
 void Sampler::sweep(double beta) {
@@ -644,22 +660,18 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   // jump between the rival tables T1 and T2 of Fig. 5, which single-hypothesis moves can only
   // make through a deep valley of two overlapping tables.
   IdSet<4> adopt;
-  // The corners' offsets and the legs' centres of the new table's legs, the proposer's first.
-  std::array<Vec2, 5> local, at;
-  local[0] = p.cornerOffset(k % 4);
-  at[0] = l.pose.position();
+  CornerPairs pairs;
+  pairs.add(p.cornerOffset(k % 4), l.pose.position());
   if (opt_.smart_parent) {
     for (int c = 0; c < 4; ++c) {
       const Vec2 corner =
           pose.toWorld(p.cornerOffset(c), cos_th[static_cast<size_t>(k / 4)], sin_th[static_cast<size_t>(k / 4)]);
       bb_.legsNear(corner, link_r, [&](int32_t o) {
         const LegHyp& ol = bb_.leg(o);
-        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= link_r2 &&
-            !adopt.contains(o) && adopt.n < 4) {
-          adopt.add(o);
-          local[static_cast<size_t>(adopt.n)] = p.cornerOffset(c);
-          at[static_cast<size_t>(adopt.n)] = ol.pose.position();
-        }
+        if (o == leg || !ol.alive || (ol.pose.position() - corner).squaredNorm() > link_r2) return;
+        const int before = adopt.n;
+        adopt.add(o);
+        if (adopt.n > before) pairs.add(p.cornerOffset(c), ol.pose.position());
       });
     }
   }
@@ -670,10 +682,7 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   // model (no walls): there the fit mostly builds tables on the legs of wall contacts
   // (docs/BLACKBOARD.md "Tables fitted to their legs"), and its figures stay the paper's.
   const bool fitted = opt_.fit_parent && walls() && adopt.n > 0;
-  if (fitted) {
-    const Pose2 fit = fitRigid(local.data(), at.data(), adopt.n + 1, pose.theta);
-    pose = {fit.x, fit.y, wrapPeriod(fit.theta, kPi)};
-  }
+  if (fitted) pose = pairs.fit(pose.theta);
   std::array<int32_t, 4> adopt_parent;
   Touched t;
   t.legs.add(leg);
@@ -1492,29 +1501,23 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   shape.depth = d;
   shape.leg = l.side;
   IdSet<4> adopt;
-  std::array<Vec2, 5> local, at;  // as proposeParent: corner offsets and leg centres
-  local[0] = pose.toLocal(c);
-  at[0] = c;
+  CornerPairs pairs;
+  pairs.add(pose.toLocal(c), c);
   if (opt_.smart_parent) {
     for (int corner_i = 0; corner_i < 4; ++corner_i) {
       const Vec2 corner = shape.corner(corner_i);
       bb_.legsNear(corner, r, [&](int32_t o) {
         const LegHyp& ol = bb_.leg(o);
-        if (o != leg && ol.alive && (ol.pose.position() - corner).squaredNorm() <= r * r &&
-            !adopt.contains(o) && adopt.n < 4) {
-          adopt.add(o);
-          local[static_cast<size_t>(adopt.n)] = pose.toLocal(corner);
-          at[static_cast<size_t>(adopt.n)] = ol.pose.position();
-        }
+        if (o == leg || !ol.alive || (ol.pose.position() - corner).squaredNorm() > r * r) return;
+        const int before = adopt.n;
+        adopt.add(o);
+        if (adopt.n > before) pairs.add(pose.toLocal(corner), ol.pose.position());
       });
     }
   }
   // As proposeParent: the table where its corners fit its legs best, its legs turned to it.
   const bool fitted = opt_.fit_parent && adopt.n > 0;
-  if (fitted) {
-    const Pose2 fit = fitRigid(local.data(), at.data(), adopt.n + 1, pose.theta);
-    pose = {fit.x, fit.y, wrapPeriod(fit.theta, kPi)};
-  }
+  if (fitted) pose = pairs.fit(pose.theta);
   const Turn turn = (fitted || from_partners) ? Turn::kAll : Turn::kNoLeg;
   std::array<int32_t, 4> adopt_parent;
   std::array<double, 5> old_side;  // the seed leg's, then the adopted legs'
