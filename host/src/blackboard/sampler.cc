@@ -615,7 +615,15 @@ void Sampler::proposeParent(int32_t leg, double beta) {
   // the legs at a side's or diagonal's distance, and the legs so supported that the table takes
   // turn with it (below).
   const bool free_turn = opt_.smart_parent && pointSupported(l.pose.position());
-  const double axis = free_turn ? axisFromLegs(l.pose.position(), leg, l.pose.theta) : l.pose.theta;
+  // With walls in the model (and the fit below), half the time the axes come from the partners
+  // even when oriented shapelets support the leg, as proposeParentSized takes them: a leg's
+  // orientation comes from its few shapelets and scatters with their angle noise (pi/8 in the
+  // paper's "very noisy" regime: 0.3 rad puts a 0.8 m table's far corner 25 cm from its leg),
+  // the line between two legs by the legs' position errors over their span (~0.03 rad).
+  const bool from_partners =
+      free_turn || (opt_.smart_parent && opt_.fit_parent && walls() && rng_.uniform() < 0.5);
+  const double axis =
+      from_partners ? axisFromLegs(l.pose.position(), leg, l.pose.theta) : l.pose.theta;
   // The 8 table placements with this leg at a corner: 2 orientations (modulo pi) x 4 corners.
   std::array<Pose2, 8> place;
   std::array<double, 8> weight;

@@ -139,15 +139,22 @@ void Sampler::proposeWallBirth(int slot, double beta) {
                            logGauss2(da, sr) + logGauss2(db, sr));
   (void)log_q_ratio;
 
-  // Orphan legs standing in the new wall's solid (priming puts a leg behind every contact, the
-  // wall's included) die in the same move: the wall takes over their evidence, as a new table
-  // adopts the legs at its corners (proposeParent). RJ: the reverse is the wall's death with
-  // those legs' births (their priming densities); not computed here.
+  // Legs standing in the new wall's solid (priming puts a leg behind every contact, the wall's
+  // included) die in the same move: the wall takes over their evidence, as a new table adopts
+  // the legs at its corners (proposeParent). So do their tables when no leg is left to them:
+  // a table born on a wall's contacts (its other corners out in unswept space, where nothing
+  // refutes it) is then one move from the wall, not a death and a birth apart across a valley.
+  // A leg whose table the move could not also track (Touched::tables full) stays. RJ: the
+  // reverse is the wall's death with those tables' and legs' births; not computed here.
   WallHyp probe;
   probe.a = a;
   probe.b = b;
   Touched t;
-  bb_.orphanLegsInSolid(probe, t.legs);
+  bb_.legsInSolid(probe, [&](int32_t o) {
+    const int32_t parent = bb_.leg(o).parent;
+    if (parent != kNone) t.tables.add(parent);
+    if (parent == kNone || t.tables.contains(parent)) t.legs.add(o);
+  });
   wall_slots_.clear();
   bb_.beginCollect();
   bb_.collectShapeletsNearSegment(a, b, wall_slots_);
@@ -155,15 +162,23 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   for (int32_t l : t.legs.span()) bb_.killLeg(l);
+  IdSet<8> emptied;
+  for (int32_t tab : t.tables.span()) {
+    if (bb_.table(tab).n_children > 0) continue;
+    emptied.add(tab);
+    bb_.killTable(tab);
+  }
   const int32_t id = bb_.addWall(a, b);
   t.walls.add(id);
   const double e1 = bb_.energyAfter(t, wall_slots_);
   if (decide(e1 - e0, beta)) {
     for (int32_t l : t.legs.span()) bb_.releaseLeg(l);
+    for (int32_t tab : emptied.span()) bb_.releaseTable(tab);
     return;
   }
   bb_.killWall(id);
   bb_.releaseWall(id);
+  for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
   for (int32_t l : t.legs.span()) bb_.reviveLeg(l);
 }
 

@@ -156,14 +156,13 @@ class Blackboard {
   void collectShapeletsNearSegment(const Vec2& a, const Vec2& b, std::vector<int32_t>& out);
   // The same for the shapelets a leg could cause (shapeletsNear).
   void collectShapeletsNearLeg(int32_t leg, std::vector<int32_t>& out);
-  // Adds to `out` the live legs without a parent that stand in `w`'s solid (inWallSolid), as
-  // many as it holds.
-  template <int N>
-  void orphanLegsInSolid(const WallHyp& w, IdSet<N>& out) const {
+  // Calls f(id) for every live leg that stands in `w`'s solid (inWallSolid).
+  template <typename F>
+  void legsInSolid(const WallHyp& w, F&& f) const {
     nearWall(leg_hash_, w, p_.leg_side + p_.wall_solid_depth,
              [&](int32_t o) { return legs_[o].pose.position(); }, [&](int32_t o) {
                const LegHyp& l = legs_[o];
-               if (l.alive && l.parent == kNone && inWallSolid(legRect(l), w)) out.add(o);
+               if (l.alive && inWallSolid(legRect(l), w)) f(o);
              });
   }
 

@@ -38,7 +38,8 @@ struct NoiseRegime {
 Result<NoiseRegime> noiseRegimeByName(const std::string& name);
 
 // Eq. 12's sigma_r^S, sigma_theta^S "model sensor noise": `model` with its shapelet sigmas
-// raised to the sensor's where they are smaller.
+// raised to the sensor's where they are smaller; under the walled models (ModelParams::walled())
+// to sqrt(2) x the sensor's, so that eq. 12's exp(-(d / sigma)^2) is the noise's Gaussian.
 ModelParams withSensorNoise(ModelParams model, const NoiseRegime& noise);
 
 class SensorModel {
