@@ -160,8 +160,10 @@ void Sampler::sweep(double beta) {
     const double r = rng_.uniform();
     if (h.is_table) {
       if (!bb_.table(h.id).alive) continue;
-      if (r < opt_.r1) deathTable(h.id, beta);
-      else if (r < opt_.r3 && r >= opt_.r2) proposeChild(h.id, beta);
+      if (r < opt_.r1) {
+        if (walls() && rng_.uniform() < 0.5) deathTableWithLegs(h.id, beta);
+        else deathTable(h.id, beta);
+      } else if (r < opt_.r3 && r >= opt_.r2) proposeChild(h.id, beta);
       else if (!sized) jitterTable(h.id, beta);  // tables have only the null parent
       else {
         // The rooms model shares the pose-move slot among pose, size and leg side.
@@ -515,6 +517,39 @@ void Sampler::deathTable(int32_t id, double beta) {
   const double e1 = bb_.energyAfter(t);
   if (decide(e1 - e0, beta)) bb_.releaseTable(id);
   else bb_.reviveTable(id);
+}
+
+void Sampler::deathTableWithLegs(int32_t id, double beta) {
+  // A table alone dies leaving its legs orphans, each then paying its null prior (and a leg at a
+  // corner no contact supports explains nothing); its legs alone die one by one while the table
+  // pays eps_a for each corner emptied. Either first step is uphill where the whole object is
+  // not worth its evidence: a table on a wall's noisy contacts, its far legs out where nothing
+  // was sensed (docs/BLACKBOARD.md "Tables fitted to their legs"). This move crosses that valley
+  // in one step.
+  Touched t;
+  t.tables.add(id);
+  const TableHyp& tab = bb_.table(id);
+  const int n = tab.n_children;
+  std::array<int32_t, kMaxChildren> kids;
+  for (int i = 0; i < n; ++i) {
+    kids[static_cast<size_t>(i)] = tab.children[i];
+    t.legs.add(tab.children[i]);
+    bb_.shapeletsNear(bb_.leg(tab.children[i]).pose.position(), t.shapelets);
+  }
+  // A full set may have dropped a shapelet the move changes: not proposed.
+  if (t.shapelets.n >= static_cast<int>(std::size(t.shapelets.ids))) return;
+  begin();
+  const double e0 = bb_.energyBefore(t);
+  for (int i = 0; i < n; ++i) bb_.killLeg(kids[static_cast<size_t>(i)]);
+  bb_.killTable(id);
+  const double e1 = bb_.energyAfter(t);
+  if (decide(e1 - e0, beta)) {
+    bb_.releaseTable(id);
+    for (int i = 0; i < n; ++i) bb_.releaseLeg(kids[static_cast<size_t>(i)]);
+    return;
+  }
+  bb_.reviveTable(id);
+  for (int i = 0; i < n; ++i) bb_.reviveLeg(kids[static_cast<size_t>(i)]);
 }
 
 void Sampler::parentChange(int32_t leg, double beta) {

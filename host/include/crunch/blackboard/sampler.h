@@ -263,6 +263,9 @@ class Sampler {
   // Q(ch(T)) share it.
   void proposeLegBirth(const Pose2& pose, double side, int32_t parent, double beta);
   void deathTable(int32_t id, double beta);
+  // The walled models' other table death: the table and its legs die together, the reverse of
+  // a table born with its legs (proposeParent's adoption, then proposeChild; the pool's start).
+  void deathTableWithLegs(int32_t id, double beta);
   void deathLeg(int32_t id, double beta);
   void parentChange(int32_t leg, double beta);
   // A pose move's target: Gaussian steps in x, y and theta (theta kept modulo `period`).
