@@ -2,9 +2,9 @@
 # Reproduces the charts of docs/RESULTS.md "Charts" (issue 6): builds crunchhost (Release, the
 # default preset), runs two sweeps with the gaussian sensor model on the built-in arena and draws
 # them with `crunchhost sweep-chart` into docs/img/results/{budget,noise}/.
-#   (a) budget: noise realistic,noisy x schedule-steps 4,8,16 x sweeps 1,2 x working-memory 7,14
+#   (a) budget, the paper's model: noise realistic,noisy x schedule-steps 4,8,16 x sweeps 1,2 x working-memory 7,14
 #       x seeds 1-3 (72 runs): accuracy against cost, the Pareto front, the paper's setting.
-#   (b) noise: --noise-scale 0.5,1,2,3,5,8,12 (sigma_r 2.5 ... 60 mm) at the paper's setting x
+#   (b) noise, the paper's model: --noise-scale 0.5,1,2,3,5,8,12 (sigma_r 2.5 ... 60 mm) at the paper's setting x
 #       seeds 1-5 (35 runs): accuracy against noise, where mapping fails.
 #   (c) scale: bench/scale_bench, cost per proposal and memory against 1e2 .. 1e5 shapelets
 #       (docs/RESULTS.md "Scale"; about 2 min), charts docs/img/results/scale*.png.
@@ -110,20 +110,20 @@ elif [[ -n "$ONLY" ]]; then
 fi
 
 start=$(date +%s)
-"$BIN" sweep --noise realistic,noisy --schedule-steps 4,8,16 --sweeps 1,2 --working-memory 7,14 \
+"$BIN" sweep --model paper --noise realistic,noisy --schedule-steps 4,8,16 --sweeps 1,2 --working-memory 7,14 \
     --seeds 3 --jobs "$JOBS" --out "$RAW/budget"
 "$BIN" sweep-chart --in "$RAW/budget" --out "$IMG/budget"
 cp "$RAW/budget/sweep.csv" "$IMG/budget/sweep.csv"
 
-"$BIN" sweep --noise-scale 0.5,1,2,3,5,8,12 --seeds 5 --jobs "$JOBS" --out "$RAW/noise"
+"$BIN" sweep --model paper --noise-scale 0.5,1,2,3,5,8,12 --seeds 5 --jobs "$JOBS" --out "$RAW/noise"
 "$BIN" sweep-chart --in "$RAW/noise" --out "$IMG/noise"
 cp "$RAW/noise/sweep.csv" "$IMG/noise/sweep.csv"
 build/default/bench/scale_bench --chart "$IMG/scale"
 # (d) blackboard snapshots (paper Figs. 3-4): pose 120 of the default arena, at the end of its
 #     annealing and after its hottest temperature.
-"$BIN" --sim --snapshot 120 --out "$RAW/snap_cold" >/dev/null
+"$BIN" --sim --model paper --snapshot 120 --out "$RAW/snap_cold" >/dev/null
 cp "$RAW/snap_cold/snapshot_120.png" "$IMG/snapshot_default_120.png"
-"$BIN" --sim --snapshot 120 --snapshot-temperature 0 --out "$RAW/snap_hot" >/dev/null
+"$BIN" --sim --model paper --snapshot 120 --snapshot-temperature 0 --out "$RAW/snap_hot" >/dev/null
 cp "$RAW/snap_hot/snapshot_120.png" "$IMG/snapshot_default_120_hot.png"
 "$BIN" sweep --model paper,walls,rooms --noise-scale 1,2,5 --schedule-steps 4,8,16 --seeds 5 \
     --jobs "$JOBS" --out "$RAW/models"

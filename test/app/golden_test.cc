@@ -1,8 +1,8 @@
 // Behaviour kept across restructuring (issue 11): outputs of the `crunchhost` binary compared
 // with files made by the binary of commit 1e043c6, before the sensing chain and the control loop
 // moved into the library (test/golden/README.md says how each was made).
-//   - `--sim` (gaussian sensor, realistic noise, seed 1) on the default arena and on the test
-//     scenes: map.json equal in every value but the measured wall time.
+//   - `--sim --model paper` (gaussian sensor, realistic noise, seed 1) on the default arena and
+//     on the test scenes: map.json equal in every value but the measured wall time.
 //   - `sweep`: every column of every row equal but wall_s and the process's peak RSS.
 //   - `--replay` of a `--robot` recording made inside crunch-virtual-robot before the move:
 //     the same map and the same shapelets, counts and final pose in report.json.
@@ -80,8 +80,9 @@ TEST_CASE("Golden: --sim maps the test scenes exactly as before the restructurin
                                      "physics_one_table");
   TempDir dir;
   const std::string arg = scene == "default" ? "" : " --scene test/scenes/" + scene + ".json";
-  REQUIRE(run(std::string(CRUNCHHOST) + " --sim" + arg + " --json --out " + dir.path().string()) ==
-          0);
+  // The paper's model: the goldens were made with it (the default then).
+  REQUIRE(run(std::string(CRUNCHHOST) + " --sim --model paper" + arg + " --json --out " +
+              dir.path().string()) == 0);
   const json got = mapWithoutTime(readJson(dir.file("map.json")));
   const json want = readJson(kSource + "/test/golden/maps/" + scene + ".json");
   INFO(scene << ": " << json::diff(want, got).dump().substr(0, 2000));
@@ -119,7 +120,8 @@ TEST_CASE("Golden: --threads 1, 2 and 3 give the same map.json", "[golden]") {
 TEST_CASE("Golden: sweep rows are the same as before the restructuring", "[golden]") {
   TempDir dir;
   REQUIRE(run(std::string(CRUNCHHOST) +
-              " sweep --scene test/scenes/two_tables.json --scene default --noise-scale 1,3"
+              " sweep --model paper --scene test/scenes/two_tables.json --scene default"
+              " --noise-scale 1,3"
               " --schedule-steps 4,8 --seeds 2 --jobs 2 --out " + dir.path().string()) == 0);
   const auto got = splitLines(readText(dir.file("sweep.csv")));
   const auto want = splitLines(readText(kSource + "/test/golden/sweep_before_refactor.csv"));

@@ -78,13 +78,14 @@ TEST_CASE("Sweep grid: the object model axis sits between scene and noise", "[sw
   CHECK((p.model == ObjectModel::kRooms && p.noise == 0 && p.schedule_steps == 4 && p.seed == 1));
   CHECK(g.value().mappingOptions(p).model.objects == ObjectModel::kRooms);
   CHECK(sweepRow(g.value(), 12, {}, {}, {}, 0.0, 0).model == "rooms");
-  // No --model: the paper's, and the fingerprint of a grid from before the axis.
+  // No --model: crunchhost --sim's (walls). `--model paper` alone keeps the fingerprint of a
+  // grid from before the axis (the golden sweep's).
   const auto plain = buildSweepGrid(smallSpec());
   REQUIRE(plain);
-  CHECK(plain.value().models == std::vector<ObjectModel>{ObjectModel::kPaper});
+  CHECK(plain.value().models == std::vector<ObjectModel>{ObjectModel::kWalls});
   SweepGridSpec paper_only = smallSpec();
   paper_only.models = "paper";
-  CHECK(buildSweepGrid(paper_only).value().fingerprint == plain.value().fingerprint);
+  CHECK(buildSweepGrid(paper_only).value().fingerprint != plain.value().fingerprint);
   CHECK(g.value().fingerprint != plain.value().fingerprint);
 }
 
@@ -284,11 +285,11 @@ TEST_CASE("Sweep curves.csv: one line per whisk of every explore row, written be
   CHECK(lines[0] == "grid_index,scene,model,explore,noise,seed,whisk,travel_m,whisks,recall,"
                     "precision,f1,run_travel_m,run_recall,run_f1");
   // Each line carries its run's travel and final map (rowAt: recall 1, F1 0.8).
-  CHECK(lines[1] == "0,default,paper,grid,ideal,1,0,0.5,1,0.0,null,0.0,1.5,1.0,0.8");
+  CHECK(lines[1] == "0,default,walls,grid,ideal,1,0,0.5,1,0.0,null,0.0,1.5,1.0,0.8");
   CHECK(lines[3].find(",0.75,1.0,0.8") != std::string::npos);
-  CHECK(lines[2].rfind("0,default,paper,grid,ideal,1,1,1.5,2,0.5,1.0,0.6666", 0) == 0);
+  CHECK(lines[2].rfind("0,default,walls,grid,ideal,1,1,1.5,2,0.5,1.0,0.6666", 0) == 0);
   // 13 = (random, ideal, 4 temperatures, seed 2)
-  CHECK(lines[3].rfind("13,default,paper,random,ideal,2,0,0.75,1,0.25,0.5,0.333", 0) == 0);
+  CHECK(lines[3].rfind("13,default,walls,random,ideal,2,0,0.75,1,0.25,0.5,0.333", 0) == 0);
   const std::string json = sweepRowsJson(rows);
   const auto back = parseSweepRows(json, "sweep.json");
   REQUIRE(back);

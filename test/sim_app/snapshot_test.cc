@@ -56,8 +56,10 @@ TEST_CASE("crunchhost --sim --snapshot K: the blackboard after pose K", "[app][s
   const fs::path dir = fs::temp_directory_path() / "crunch_app_test_snapshot";
   fs::remove_all(dir);
   app::SimOptions opt = twoTables(dir);
-  // two_tables.json has 20 reachable poses; after the last (seed 1) the blackboard holds one
-  // table hypothesis (a MAP table) with legs in it and a full working memory.
+  // two_tables.json has 20 reachable poses; after the last (seed 1) the paper's model's
+  // blackboard holds one table hypothesis (a MAP table) with legs in it and a full working
+  // memory (the walls model's holds none: the contacts there are the arena's corners).
+  opt.mapping.model.objects = ObjectModel::kPaper;
   opt.snapshot_pose = 19;
   std::ostringstream out, err;
   REQUIRE(app::runSim(opt, out, err) == 0);

@@ -7,6 +7,12 @@
 
 namespace crunch {
 
+ModelParams defaultMappingModel() {
+  ModelParams p;
+  p.objects = ObjectModel::kWalls;
+  return p;
+}
+
 Status MappingOptions::validate() const {
   const Status checks[] = {within("model", model.validate()),
                            within("sampler", sampler.validate()),

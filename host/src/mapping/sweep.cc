@@ -168,8 +168,8 @@ Status loadScenes(const SweepGridSpec& spec, SweepGrid& g, std::vector<std::stri
 }
 
 Status parseModels(const SweepGridSpec& spec, SweepGrid& g) {
-  if (spec.models.empty()) {
-    g.models = {ObjectModel::kPaper};
+  if (spec.models.empty()) {  // crunchhost --sim's model (defaultMappingModel)
+    g.models = {defaultMappingModel().objects};
     return okStatus();
   }
   auto names = splitList(spec.models, "--model");

@@ -57,7 +57,7 @@ extern const std::vector<std::string> kSweepColumns;
 struct SweepGridSpec {
   // Scene files; the word "default" is the built-in arena. Empty: {"default"}.
   std::vector<std::string> scenes;
-  std::string models;          // paper,rooms (default: paper)
+  std::string models;          // paper,rooms (default: --sim's, walls)
   std::string noise;           // ideal,realistic,noisy names (default: realistic, if no scale)
   std::string noise_scale;     // multiples of realistic's sigma_r = 5 mm and sigma_phi = pi/32
   std::string schedule_steps;  // SamplerOptions::schedule_steps values (default 16)
