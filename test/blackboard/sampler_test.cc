@@ -503,3 +503,26 @@ TEST_CASE("Rooms model: the paper's model keeps its one size", "[blackboard]") {
   for (int32_t id = 0; id < bb.legExtent(); ++id)
     if (bb.leg(id).alive) CHECK(bb.leg(id).side == p.leg_side);
 }
+
+TEST_CASE("Blackboard: the point contacts in working memory are counted as they come and go",
+          "[blackboard]") {
+  // Sampler::partnersNear scans the shapelets around a leg for point contacts only when there
+  // are any (the gaussian sensor's are all oriented).
+  ModelParams p;
+  Blackboard bb(p, 3, 16);
+  Shapelet point = MakeShapelet({1, 1, 0}, p.leg_side, 0, 0.0);
+  point.oriented = false;
+  const Shapelet face = MakeShapelet({1, 1, 0}, p.leg_side, 1, 0.0);
+  bb.pushShapelet(point);
+  bb.pushShapelet(face);
+  bb.pushShapelet(point);
+  CHECK(bb.pointShapeletCount() == 2);
+  bb.pushShapelet(face);  // evicts the first point
+  CHECK(bb.pointShapeletCount() == 1);
+  bb.pushShapelet(face);
+  bb.pushShapelet(face);  // evicts the second
+  CHECK(bb.pointShapeletCount() == 0);
+  bb.pushShapelet(point);
+  bb.clearShapelets();
+  CHECK(bb.pointShapeletCount() == 0);
+}

@@ -63,9 +63,11 @@ int Blackboard::pushShapelet(const Shapelet& s) {
   const auto i = static_cast<size_t>(slot);
   if (wm_used_[i]) {
     shapelet_hash_.remove(slot, {wm_[i].x, wm_[i].y});
+    wm_points_ -= !wm_[i].oriented;
   } else {
     ++wm_count_;
   }
+  wm_points_ += !s.oriented;
   wm_[i] = s;
   wm_used_[i] = true;
   slot_gen_[i] = 0;  // its cached term, if any, was the evicted shapelet's
@@ -80,6 +82,7 @@ void Blackboard::clearShapelets() {
   std::fill(wm_used_.begin(), wm_used_.end(), false);
   wm_next_ = 0;
   wm_count_ = 0;
+  wm_points_ = 0;
 }
 
 void Blackboard::shapeletsNear(const Vec2& p, IdSet<64>& out) const {

@@ -362,6 +362,7 @@ void Sampler::partnersNear(const Vec2& c, int32_t self, F&& f) const {
     const LegHyp& l = bb_.leg(o);
     if (o != self && l.alive) f(l.pose.position());
   });
+  if (bb_.pointShapeletCount() == 0) return;  // only point contacts are partners
   bb_.shapeletsWithin(c, reach(), [&](int32_t slot) {
     const Shapelet& sh = bb_.shapelet(slot);
     if (!sh.oriented) f(Vec2{sh.x, sh.y});

@@ -102,6 +102,8 @@ class Blackboard {
   void clearShapelets();
   int workingMemoryCapacity() const { return static_cast<int>(wm_.size()); }
   int shapeletCount() const { return wm_count_; }
+  // Shapelets in working memory without an orientation (point contacts).
+  int pointShapeletCount() const { return wm_points_; }
   bool slotUsed(int slot) const { return wm_used_[static_cast<size_t>(slot)]; }
   const Shapelet& shapelet(int slot) const { return wm_[static_cast<size_t>(slot)]; }
   // Adds to `out` the slots of shapelets a leg at `p` could cause (eq. 30).
@@ -289,6 +291,7 @@ class Blackboard {
   std::vector<bool> wm_used_;
   int wm_next_ = 0;
   int wm_count_ = 0;
+  int wm_points_ = 0;
   int live_tables_ = 0;
   int live_legs_ = 0;
   double log_eps_a_, log_eps_b_, log_eps_c_, table_odds_;
