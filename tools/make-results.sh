@@ -9,9 +9,10 @@
 #   (c) scale: bench/scale_bench, cost per proposal and memory against 1e2 .. 1e5 shapelets
 #       (docs/RESULTS.md "Scale"; about 2 min), charts docs/img/results/scale*.png.
 #   (d) blackboard snapshots at pose 120 of the default arena, cold and hot.
-#   (e) models: --model paper,walls,rooms x --noise-scale 1,2,5 x schedule-steps 4,8,16 x seeds
-#       1-5 (135 runs): accuracy against cost per object model and each model against noise
-#       (docs/RESULTS.md "Object models"), docs/img/results/models/.
+#   (e) models: --model paper,walls,rooms x noise realistic (5 mm, pi/32), x2 (10 mm) and the
+#       paper's noisy (25 mm, pi/8) x schedule-steps 4,8,16 x seeds 1-5 (135 runs): accuracy
+#       against cost per object model and each model against noise (docs/RESULTS.md "Object
+#       models"), docs/img/results/models/.
 #   (f) exploration (issue 14): sweep --explore grid,random,frontier,entropy,infogain x seeds 1-5
 #       on the built-in arena and every mapping scene of test/scenes/ (not bad_*, hil_*,
 #       physics_*), one sweep per scene with --travel-budget = 1.25 x the scene's grid trajectory
@@ -125,7 +126,7 @@ build/default/bench/scale_bench --chart "$IMG/scale"
 cp "$RAW/snap_cold/snapshot_120.png" "$IMG/snapshot_default_120.png"
 "$BIN" --sim --model paper --snapshot 120 --snapshot-temperature 0 --out "$RAW/snap_hot" >/dev/null
 cp "$RAW/snap_hot/snapshot_120.png" "$IMG/snapshot_default_120_hot.png"
-"$BIN" sweep --model paper,walls,rooms --noise-scale 1,2,5 --schedule-steps 4,8,16 --seeds 5 \
+"$BIN" sweep --model paper,walls,rooms --noise realistic,noisy --noise-scale 2 --schedule-steps 4,8,16 --seeds 5 \
     --jobs "$JOBS" --out "$RAW/models"
 "$BIN" sweep-chart --in "$RAW/models" --out "$IMG/models"
 cp "$RAW/models/sweep.csv" "$IMG/models/sweep.csv"
