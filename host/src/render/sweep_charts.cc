@@ -290,6 +290,14 @@ Chart sweepNoiseChart(const std::vector<std::vector<SettingSummary>>& models) {
     c.series.push_back(f1);
     c.series.push_back(precision);
   }
+  if (several) {
+    // Three lines a model make the legend tall: the x axis runs on past the noisiest point so
+    // that the legend stands right of the data, not over its precision at that point.
+    double widest = kPaperNoisySigmaR * 1e3;
+    for (const auto& m : models)
+      for (const SettingSummary& s : m) widest = std::max(widest, s.sigma_r * 1e3);
+    c.options.x_max = 1.8 * widest;
+  }
   return c;
 }
 
