@@ -95,6 +95,10 @@ TEST_CASE("sweepCharts: two object models get their own fronts, a comparison and
   REQUIRE(noise.series[5].y.size() == 2);
   CHECK(noise.series[5].y[0] == Approx(0.9));
   CHECK(noise.series[5].y[1] == Approx(0.4));
+  // Several models' legend is tall: the x axis runs on past the noisiest point (25 mm) so the
+  // legend, top right, stands clear of the data.
+  REQUIRE(noise.options.x_max.has_value());
+  CHECK(*noise.options.x_max >= 1.5 * 25.0);
   CHECK_THAT(set.report, Catch::Contains("rooms, realistic: Pareto front") &&
                              Catch::Contains("noise (rooms: 16 T x 1 sweep, WM 7): recall"));
   CHECK(set.summary_csv.find("default,rooms,noisy,25,16,1,7,2,0.4000") != std::string::npos);
