@@ -525,8 +525,7 @@ void Sampler::deathTableWithLegs(int32_t id, double beta) {
   // corner no contact supports explains nothing); its legs alone die one by one while the table
   // pays eps_a for each corner emptied. Either first step is uphill where the whole object is
   // not worth its evidence: a table on a wall's noisy contacts, its far legs out where nothing
-  // was sensed (docs/BLACKBOARD.md "Tables fitted to their legs"). This move crosses that valley
-  // in one step.
+  // was sensed (docs/BLACKBOARD.md "Noisy walls"). This move crosses that valley in one step.
   Touched t;
   t.tables.add(id);
   const TableHyp& tab = bb_.table(id);
@@ -776,12 +775,7 @@ bool Sampler::decideNewTable(int32_t table, const Pose2& pose, Turn turn, Touche
     }
   }
   IdSet<8> emptied;
-  for (int32_t tab : t.tables.span()) {
-    if (bb_.table(tab).n_children == 0) {
-      emptied.add(tab);
-      bb_.killTable(tab);
-    }
-  }
+  killEmptied(t.tables, emptied);
   t.tables.add(table);
   const double e1 = bb_.energyAfter(t);
   if (decide(e1 - e0, beta)) {
@@ -791,6 +785,14 @@ bool Sampler::decideNewTable(int32_t table, const Pose2& pose, Turn turn, Touche
   for (int i = 0; i < turned.n; ++i) bb_.moveLeg(turned.ids[i], turned_from[static_cast<size_t>(i)]);
   for (int32_t tab : emptied.span()) bb_.reviveTable(tab);
   return false;
+}
+
+void Sampler::killEmptied(const IdSet<8>& tables, IdSet<8>& emptied) {
+  for (int32_t tab : tables.span()) {
+    if (bb_.table(tab).n_children > 0) continue;
+    emptied.add(tab);
+    bb_.killTable(tab);
+  }
 }
 
 bool Sampler::legDirectlyLinked(int32_t leg) const {

@@ -163,11 +163,7 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   const double e0 = bb_.energyBefore(t, wall_slots_);
   for (int32_t l : t.legs.span()) bb_.killLeg(l);
   IdSet<8> emptied;
-  for (int32_t tab : t.tables.span()) {
-    if (bb_.table(tab).n_children > 0) continue;
-    emptied.add(tab);
-    bb_.killTable(tab);
-  }
+  killEmptied(t.tables, emptied);
   const int32_t id = bb_.addWall(a, b);
   t.walls.add(id);
   const double e1 = bb_.energyAfter(t, wall_slots_);

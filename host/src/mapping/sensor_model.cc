@@ -23,8 +23,8 @@ ModelParams withSensorNoise(ModelParams model, const NoiseRegime& noise) {
   // Eq. 12's kernel exp(-(d / sigma)^2) is a Gaussian of standard deviation sigma / sqrt(2):
   // the walled models take sigma = sqrt(2) x the sensor's, so that the kernel is the noise's own
   // Gaussian; with sigma = the sensor's a wall, which cannot bend to its contacts' noise, paid
-  // twice the misfit it should against legs, which can (docs/BLACKBOARD.md "The kernel matched to
-  // the noise"). The paper's model keeps sigma = the sensor's, and so its figures.
+  // twice the misfit it should against legs, which can (docs/BLACKBOARD.md "Noisy walls"). The
+  // paper's model keeps sigma = the sensor's, and so its figures.
   const double k = model.walled() ? std::sqrt(2.0) : 1.0;
   model.sigma_r_shapelet = std::max(model.sigma_r_shapelet, k * noise.sigma_r);
   model.sigma_theta_shapelet = std::max(model.sigma_theta_shapelet, k * noise.sigma_phi);

@@ -291,6 +291,9 @@ class Sampler {
   // turns the legs back and revives those tables, false (the caller restores parents and
   // removes `table`).
   enum class Turn { kNoLeg, kPointSupported, kAll };
+  // Kills each of `tables` left without a child, adding it to `emptied` (a move that takes legs
+  // from their tables: revive them if refused, release them if accepted).
+  void killEmptied(const IdSet<8>& tables, IdSet<8>& emptied);
   bool decideNewTable(int32_t table, const Pose2& pose, Turn turn, Touched& t, double e0,
                       double beta);
   // Proposes wall `id` at a..b (jitterWall, extendWall): the shapelets near the old and the

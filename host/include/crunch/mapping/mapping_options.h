@@ -45,11 +45,10 @@ enum class ChainFusion {
 Result<ChainFusion> chainFusionByName(const std::string& name);
 const char* chainFusionName(ChainFusion f);
 
-// The object model a run maps with unless told (`--model`): walls and the paper's table. It
-// maps every scene of test/scenes/ at least as well as the paper's model and the default arena
-// with F1 1.0 against 0.84 (docs/BLACKBOARD.md "Object models"); `--model paper` keeps the
-// paper's figures, and `crunchhost sweep` keeps paper as its default axis so that the charts'
-// commands still make them.
+// The object model a run maps with unless told (`--model`; `crunchhost sweep`'s default axis
+// too): walls and the paper's table. It maps every scene of test/scenes/ at least as well as the
+// paper's model and the default arena with F1 1.0 against 0.84 (docs/BLACKBOARD.md "Object
+// models"); `--model paper` keeps the paper's figures (tools/make-results.sh passes it).
 ModelParams defaultMappingModel();
 
 struct MappingOptions {
