@@ -127,6 +127,21 @@ struct CornerPairs {
     return {f.x, f.y, wrapPeriod(f.theta, kPi)};
   }
 };
+
+// The adoption of both table births: every live leg but `self` within r of `corner` joins
+// `adopt` (as many as it holds) and, if it joined, is paired in `pairs` with the corner's offset
+// in the table's frame, `local()` (evaluated only then).
+template <typename Local>
+void adoptAt(const Blackboard& bb, const Vec2& corner, Local&& local, double r, int32_t self,
+             IdSet<4>& adopt, CornerPairs& pairs) {
+  bb.legsNear(corner, r, [&](int32_t o) {
+    const LegHyp& ol = bb.leg(o);
+    if (o == self || !ol.alive || (ol.pose.position() - corner).squaredNorm() > r * r) return;
+    const int before = adopt.n;
+    adopt.add(o);
+    if (adopt.n > before) pairs.add(local(), ol.pose.position());
+  });
+}
 }  // namespace
 
 void Sampler::sweep(double beta) {
@@ -709,13 +724,7 @@ void Sampler::proposeParent(int32_t leg, double beta) {
     for (int c = 0; c < 4; ++c) {
       const Vec2 corner =
           pose.toWorld(p.cornerOffset(c), cos_th[static_cast<size_t>(k / 4)], sin_th[static_cast<size_t>(k / 4)]);
-      bb_.legsNear(corner, link_r, [&](int32_t o) {
-        const LegHyp& ol = bb_.leg(o);
-        if (o == leg || !ol.alive || (ol.pose.position() - corner).squaredNorm() > link_r2) return;
-        const int before = adopt.n;
-        adopt.add(o);
-        if (adopt.n > before) pairs.add(p.cornerOffset(c), ol.pose.position());
-      });
+      adoptAt(bb_, corner, [&] { return p.cornerOffset(c); }, link_r, leg, adopt, pairs);
     }
   }
   // With legs at two or more corners the table goes where its corners fit them best (eq. 10's
@@ -1552,13 +1561,7 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   if (opt_.smart_parent) {
     for (int corner_i = 0; corner_i < 4; ++corner_i) {
       const Vec2 corner = shape.corner(corner_i);
-      bb_.legsNear(corner, r, [&](int32_t o) {
-        const LegHyp& ol = bb_.leg(o);
-        if (o == leg || !ol.alive || (ol.pose.position() - corner).squaredNorm() > r * r) return;
-        const int before = adopt.n;
-        adopt.add(o);
-        if (adopt.n > before) pairs.add(pose.toLocal(corner), ol.pose.position());
-      });
+      adoptAt(bb_, corner, [&] { return pose.toLocal(corner); }, r, leg, adopt, pairs);
     }
   }
   // As proposeParent: the table where its corners fit its legs best, its legs turned to it.
