@@ -58,10 +58,9 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
                           Case{"--smart-gain nan", "smart_parent_gain"},
                           Case{"--smart-gain -100", "smart_parent_gain"},
                           Case{"--noise bogus", "noise"},
-                          // rj's move set has no wall or size moves (issue 13): refused, not
-                          // silently run as the paper's model.
-                          Case{"--model rooms --acceptance rj", "acceptance"},
-                          Case{"--model walls --acceptance rj", "acceptance"});
+                          // rj's move set has no size moves (issue 13): refused, not silently
+                          // run as the walls model.
+                          Case{"--model rooms --acceptance rj", "acceptance"});
   expectRefused("--sim", c);
 }
 
@@ -148,7 +147,7 @@ TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing writt
                           Case{"--sweeps 0", "sweeps_per_temperature"},
                           Case{"--noise realistic,bogus", "bogus"},
                           Case{"--noise-scale 1,1e9", "sigma_r"},
-                          Case{"--model paper,walls --acceptance rj", "acceptance"});
+                          Case{"--model paper,rooms --acceptance rj", "acceptance"});
   expectRefused("sweep", c);
 }
 

@@ -99,6 +99,11 @@ TEST_CASE("Sampler: the rooms model's size moves perform no heap allocation afte
 
 TEST_CASE("Sampler: anneal() with walls (--model walls) performs no heap allocation after warm-up",
           "[blackboard]") {
+  // Both acceptances: the paper's wall moves, and the reversible-jump sweep's wall birth/death
+  // (its per-sweep segment fits) and symmetric steps.
+  const Acceptance acceptance =
+      GENERATE(Acceptance::kTempered, Acceptance::kReversibleJump);
+  INFO("acceptance " << acceptanceName(acceptance));
   ModelParams p;
   p.objects = ObjectModel::kWalls;
   Blackboard bb(p, 96, 1024);
@@ -113,6 +118,7 @@ TEST_CASE("Sampler: anneal() with walls (--model walls) performs no heap allocat
   Rng rng(8);
   SamplerOptions opt;
   opt.wall_birth_rate = 0.5;
+  opt.acceptance = acceptance;
   Sampler sampler(bb, opt, rng);
   // Contacts along two walls (births, extends, merges, splits) and a table beside one.
   std::vector<Shapelet> stream;

@@ -202,7 +202,7 @@ TEST_CASE("Sampler: incremental and reference energies run the same chain", "[bl
 TEST_CASE("Sampler: reversible-jump options are validated, acceptance names round-trip",
           "[blackboard]") {
   SamplerOptions o;
-  o.rj_moves = {0, 0, 0, 0, 0, 0};
+  o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   REQUIRE_FALSE(o.validate());
   CHECK(o.validate().error().message.find("rj_moves") != std::string::npos);
   o = {};
@@ -211,6 +211,12 @@ TEST_CASE("Sampler: reversible-jump options are validated, acceptance names roun
   o = {};
   o.rj_cell = 0.0;
   CHECK(o.validate().error().message.find("rj_cell") != std::string::npos);
+  o = {};
+  o.rj_wall_cell = -1.0;
+  CHECK(o.validate().error().message.find("rj_wall_cell") != std::string::npos);
+  o = {};
+  o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 1, 0};  // walls' births alone: a valid (walls model) mix
+  CHECK(o.validate());
   for (Acceptance a : {Acceptance::kTempered, Acceptance::kLiteral, Acceptance::kReversibleJump})
     CHECK(acceptanceByName(acceptanceName(a)).value() == a);
   CHECK(std::string(acceptanceName(Acceptance::kTempered)) == "paper");

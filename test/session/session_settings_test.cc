@@ -137,7 +137,7 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     CHECK(errorOf(withSetting(good, "mapping.working_memory", 7.5)).find("working_memory") !=
           std::string::npos);
   }
-  SECTION("rj acceptance with the rooms model (rj has no wall or size moves yet)") {
+  SECTION("rj acceptance with the rooms model (rj has no size moves yet)") {
     CHECK(errorOf(withSetting(good, "mapping.acceptance", "rj")).find("acceptance") !=
           std::string::npos);
   }

@@ -30,10 +30,14 @@ Status SamplerOptions::validate() const {
       checkRange("rj_moves.leg_table", rj_moves.leg_table, 0.0, 1e6),
       checkRange("rj_moves.table_jitter", rj_moves.table_jitter, 0.0, 1e6),
       checkRange("rj_moves.table_birth_death", rj_moves.table_birth_death, 0.0, 1e6),
+      checkRange("rj_moves.table_group", rj_moves.table_group, 0.0, 1e6),
+      checkRange("rj_moves.wall_birth_death", rj_moves.wall_birth_death, 0.0, 1e6),
+      checkRange("rj_moves.wall_jitter", rj_moves.wall_jitter, 0.0, 1e6),
       checkAbove("rj_box_margin", rj_box_margin, 0.0, 1.0),
       checkAbove("rj_box_theta", rj_box_theta, 0.0, kPi / 4),
       checkCount("rj_steps_per_shapelet", rj_steps_per_shapelet, 1, 1000),
       checkAbove("rj_cell", rj_cell, 0.0, 1.0),
+      checkAbove("rj_wall_cell", rj_wall_cell, 0.0, 1.0),
       checkRange("resize_sigma", resize_sigma, 0.0, 1.0),
       checkRange("leg_side_sigma", leg_side_sigma, 0.0, 1.0),
       checkRange("wall_birth_rate", wall_birth_rate, 0.0, 1.0),
@@ -48,7 +52,7 @@ Status SamplerOptions::validate() const {
   }
   const ReversibleMoves& m = rj_moves;
   if (m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter +
-          m.table_birth_death <= 0.0)
+          m.table_birth_death + m.table_group + m.wall_birth_death + m.wall_jitter <= 0.0)
     return Error{"rj_moves: every weight is 0 (at least one must be positive)"};
   return okStatus();
 }
@@ -77,6 +81,8 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
   order_.reserve(4096);
   rj_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
   if (walls()) {
+    if (opt_.acceptance == Acceptance::kReversibleJump)
+      rj_fits_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
     wall_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
     inliers_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
   }
@@ -212,6 +218,9 @@ void Sampler::begin() {
 }
 
 bool Sampler::decide(double delta, double beta) {
+  // Under kReversibleJump the sweep calls decide() only from symmetric proposals (jitterWall,
+  // extendWall): Metropolis-Hastings with a log q ratio of 0.
+  if (opt_.acceptance == Acceptance::kReversibleJump) return decideRj(delta, beta, 0.0);
   if (audit_) {
     const double err = std::abs((bb_.totalEnergy() - audit_before_) - delta);
     stats_.audit_max_error = std::max(stats_.audit_max_error, err);
@@ -884,11 +893,19 @@ void Sampler::mapTables(std::vector<Pose2>& out) const {
 // under kReversibleJump; the smart table birth above is their reversible substitute.
 
 void Sampler::enterReversibleSpace() {
+  if (walls()) enterReversibleWalls();
   for (int32_t id = 0; id < bb_.legExtent(); ++id) {
     const LegHyp& l = bb_.leg(id);
     if (!l.alive || inSomeBox(l.pose)) continue;
     bb_.killLeg(id);
     bb_.releaseLeg(id);
+  }
+  // A leg off every corner of its table (a table jittered away from it under the paper's
+  // moves) leaves it: it stays, an orphan.
+  for (int32_t id = 0; id < bb_.legExtent(); ++id) {
+    const LegHyp& l = bb_.leg(id);
+    if (l.alive && l.parent != kNone && !nearCorner(bb_.table(l.parent).pose, l.pose.position()))
+      bb_.setParent(id, kNone);
   }
   for (int32_t id = 0; id < bb_.tableExtent(); ++id) {
     const TableHyp& t = bb_.table(id);
@@ -1008,8 +1025,23 @@ void Sampler::sweepReversible(double beta) {
     if (bb_.slotUsed(slot) && boxOf(slot, b)) rj_slots_.push_back(slot);
   }
   const ReversibleMoves& m = opt_.rj_moves;
+  // The walls' kernels, and each seed's fitted segment (data only: fixed through the sweep).
+  const double wall_bd = walls() ? m.wall_birth_death : 0.0;
+  const double wall_jit = walls() ? m.wall_jitter : 0.0;
+  rj_fits_.clear();
+  if (wall_bd > 0.0) {
+    for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot) {
+      Vec2 p0, p1;
+      bool swapped = false;
+      int n_inliers = 0;
+      if (!bb_.slotUsed(slot) || !fitWallAt(slot, p0, p1, swapped, n_inliers)) continue;
+      const Vec2 a = swapped ? p1 : p0, b = swapped ? p0 : p1;
+      rj_fits_.push_back({a, b, (b - a) / (b - a).norm()});
+    }
+  }
   const double total = m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table +
-                       m.table_jitter + m.table_birth_death;
+                       m.table_jitter + m.table_birth_death + m.table_group + wall_bd + wall_jit;
+  if (total <= 0.0) return;
   const int steps = opt_.rj_steps_per_shapelet * std::max<int>(1, static_cast<int>(rj_slots_.size()));
   for (int i = 0; i < steps; ++i) {
     double u = rng_.uniform() * total;
@@ -1024,8 +1056,15 @@ void Sampler::sweepReversible(double beta) {
       if (const int32_t id = randomLiveLeg(); id != kNone) rjLegTable(id, beta);
     } else if ((u -= m.table_jitter) < 0.0) {
       if (const int32_t id = randomLiveTable(); id != kNone) rjJitterTable(id, beta);
-    } else {
+    } else if ((u -= m.table_birth_death) < 0.0) {
       rjTableBirthDeath(beta);
+    } else if ((u -= m.table_group) < 0.0) {
+      rjTableGroup(beta);
+    } else if ((u -= wall_bd) < 0.0) {
+      rjWallBirthDeath(beta);
+    } else if (const int32_t id = randomLiveWall(); id != kNone) {
+      if (rng_.uniform() < 0.5) jitterWall(id, beta);
+      else extendWall(id, beta);
     }
   }
 }
@@ -1074,7 +1113,10 @@ void Sampler::rjJitterLeg(int32_t id, double beta) {
   // Symmetric Gaussian step (theta modulo pi/2 keeps it symmetric): log_q_ratio = 0.
   const Pose2 old = bb_.leg(id).pose;
   const Pose2 moved = jittered(old, kPi / 2);
-  if (!inSomeBox(moved)) return;  // outside the state space: target 0, rejected
+  // Outside the state space (target 0, rejected): in no box, or off its table's corners.
+  const int32_t parent = bb_.leg(id).parent;
+  if (!inSomeBox(moved)) return;
+  if (parent != kNone && !nearCorner(bb_.table(parent).pose, moved.position())) return;
   Touched t;
   t.legs.add(id);
   t.tables.add(bb_.leg(id).parent);
@@ -1202,6 +1244,190 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   else bb_.reviveTable(table);
 }
 
+int Sampler::nearestCorner(const Pose2& table, const Vec2& at) const {
+  const ModelParams& p = bb_.params();
+  int best = 0;
+  double best_d2 = std::numeric_limits<double>::infinity();
+  for (int c = 0; c < 4; ++c) {
+    const double d2 = (table.toWorld(p.cornerOffset(c)) - at).squaredNorm();
+    if (d2 < best_d2) {
+      best_d2 = d2;
+      best = c;
+    }
+  }
+  return best;
+}
+
+double Sampler::logLegBoxDensity(const Pose2& leg) const {
+  const double side = bb_.params().leg_side;
+  const double reach = std::hypot(0.5 * side + opt_.rj_box_margin,
+                                  0.5 * side * std::sqrt(2.0) + opt_.rj_box_margin);
+  double acc = -std::numeric_limits<double>::infinity();
+  bb_.shapeletsWithin(leg.position(), reach, [&](int32_t slot) {
+    Box b;
+    if (bb_.slotUsed(slot) && boxOf(slot, b) && inBox(b, leg)) acc = logAddExp(acc, -std::log(b.volume));
+  });
+  return acc - std::log(static_cast<double>(std::max<size_t>(1, rj_slots_.size())));
+}
+
+double Sampler::logCornerLegDensity(const Pose2& table, int corner, const Pose2& leg) const {
+  const double sr = opt_.jitter_sigma_r, st = opt_.jitter_sigma_theta;
+  const Vec2 d = leg.position() - table.toWorld(bb_.params().cornerOffset(corner));
+  // Wrapped normal of period pi/2: the nearest three windings (sigma << pi/2).
+  double dth = wrapPeriod(leg.theta - table.theta, kPi / 2);
+  if (dth > kPi / 4) dth -= kPi / 2;
+  double wrap = -std::numeric_limits<double>::infinity();
+  for (int j = -1; j <= 1; ++j) {
+    const double e = (dth + j * kPi / 2) / st;
+    wrap = logAddExp(wrap, -0.5 * e * e);
+  }
+  return -0.5 * d.squaredNorm() / (sr * sr) - std::log(2 * kPi * sr * sr) + wrap -
+         std::log(std::sqrt(2 * kPi) * st);
+}
+
+double Sampler::logGroupBirthDensity(const Pose2& table, const Pose2* legs, int n) const {
+  const double neg_inf = -std::numeric_limits<double>::infinity();
+  if (n < 1 || n > 4) return neg_inf;
+  const double half = std::log(0.5);
+  double total = neg_inf;
+  for (int first = 0; first < n; ++first) {
+    const double head = logLegBoxDensity(legs[first]);
+    if (head == neg_inf || !nearCorner(table, legs[first].position())) continue;
+    const int c1 = nearestCorner(table, legs[first].position());
+    std::array<int, 3> corners{};
+    int nc = 0;
+    for (int c = 0; c < 4; ++c)
+      if (c != c1) corners[static_cast<size_t>(nc++)] = c;
+    std::array<int, 3> others{};
+    int no = 0;
+    for (int i = 0; i < n; ++i)
+      if (i != first) others[static_cast<size_t>(no++)] = i;
+    // Injective assignments of the other legs to the three corners (at most 3! = 6): each
+    // corner has a leg (1/2 times its density) or none (1/2).
+    double assign = neg_inf;
+    std::array<int, 3> perm{0, 1, 2};
+    do {
+      // perm[i] < no: corner i takes leg others[perm[i]]; each assignment is visited once for
+      // every order of the corners left empty, so only the sorted order of those counts.
+      bool canonical = true;
+      int last_empty = -1;
+      for (int i = 0; i < 3; ++i) {
+        if (perm[static_cast<size_t>(i)] < no) continue;
+        if (perm[static_cast<size_t>(i)] < last_empty) canonical = false;
+        last_empty = perm[static_cast<size_t>(i)];
+      }
+      if (!canonical) continue;
+      double e = 0.0;
+      for (int i = 0; i < 3; ++i) {
+        const int leg = perm[static_cast<size_t>(i)];
+        e += half;
+        if (leg < no)
+          e += logCornerLegDensity(table, corners[static_cast<size_t>(i)],
+                                   legs[others[static_cast<size_t>(leg)]]);
+      }
+      assign = logAddExp(assign, e);
+    } while (std::next_permutation(perm.begin(), perm.end()));
+    total = logAddExp(total, head + logTableBirthDensity(table, legs[first]) + assign);
+  }
+  return total;
+}
+
+void Sampler::rjTableGroup(double beta) {
+  if (rj_slots_.empty()) return;
+  if (rng_.uniform() < 0.5) {
+    // Birth: a leg uniform in a slot's box, a table at one of its 8 placements with a Gaussian
+    // step, and at each other corner a leg (1/2, a Gaussian step from the corner) or none.
+    // log q ratio = log(P(death) / n_tables_after) - log(P(birth) q(T, legs)) - (1 + n) log cell.
+    Box b;
+    if (!boxOf(rj_slots_[rng_.below(static_cast<uint32_t>(rj_slots_.size()))], b)) return;
+    std::array<Pose2, 4> legs;
+    {
+      const double a = rng_.uniform(-b.u, b.u), v = rng_.uniform(b.v0, b.v1);
+      const double th = b.oriented ? b.phi + rng_.uniform(-opt_.rj_box_theta, opt_.rj_box_theta)
+                                   : rng_.uniform(0.0, kPi / 2);
+      const Vec2 c = b.origin + a * b.along + v * b.in;
+      legs[0] = {c.x(), c.y(), wrapPeriod(th, kPi / 2)};
+    }
+    const int k = static_cast<int>(rng_.below(8));
+    const double th0 = wrapPeriod(legs[0].theta + (k / 4) * (kPi / 2), kPi);
+    const Vec2 off = Pose2{0, 0, th0}.toWorld(bb_.params().cornerOffset(k % 4));
+    const Pose2 pose{legs[0].x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
+                     legs[0].y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
+                     wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+    // As rjLegTable's birth: only tables with the leg at a corner (the target's known limit,
+    // docs/BLACKBOARD.md); the density below has the same indicator.
+    if (!nearCorner(pose, legs[0].position())) return;
+    const int c1 = nearestCorner(pose, legs[0].position());
+    int n = 1;
+    for (int c = 0; c < 4; ++c) {
+      if (c == c1 || rng_.uniform() < 0.5) continue;
+      const Vec2 at = pose.toWorld(bb_.params().cornerOffset(c));
+      const Pose2 leg{at.x() + rng_.normal(0, opt_.jitter_sigma_r),
+                      at.y() + rng_.normal(0, opt_.jitter_sigma_r),
+                      wrapPeriod(pose.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi / 2)};
+      if (!inSomeBox(leg)) return;  // outside the state space: target 0
+      legs[static_cast<size_t>(n++)] = leg;
+    }
+    const double log_q = logGroupBirthDensity(pose, legs.data(), n);
+    Touched t;
+    for (int i = 0; i < n; ++i) bb_.shapeletsNear(legs[static_cast<size_t>(i)].position(), t.shapelets);
+    if (t.shapelets.n >= static_cast<int>(std::size(t.shapelets.ids))) return;
+    const double n_after = bb_.liveTables() + 1.0;
+    begin();
+    const double e0 = bb_.energyBefore(t);
+    const int32_t table = bb_.addTable(pose);
+    t.tables.add(table);
+    std::array<int32_t, 4> ids{};
+    for (int i = 0; i < n; ++i) {
+      ids[static_cast<size_t>(i)] = bb_.addLeg(legs[static_cast<size_t>(i)], table);
+      t.legs.add(ids[static_cast<size_t>(i)]);
+    }
+    const double e1 = bb_.energyAfter(t);
+    if (!decideRj(e1 - e0, beta,
+                  -std::log(n_after) - log_q - (1.0 + n) * std::log(opt_.rj_cell))) {
+      for (int i = n - 1; i >= 0; --i) {
+        bb_.killLeg(ids[static_cast<size_t>(i)]);
+        bb_.releaseLeg(ids[static_cast<size_t>(i)]);
+      }
+      bb_.killTable(table);
+      bb_.releaseTable(table);
+    }
+    return;
+  }
+  // Death of a table with all its legs: the negative of the birth's ratio.
+  const int32_t id = randomLiveTable();
+  if (id == kNone) return;
+  const double n_tables = bb_.liveTables();
+  const TableHyp& tab = bb_.table(id);
+  const int n = tab.n_children;
+  if (n < 1 || n > 4) return;  // the birth makes one to four legs
+  std::array<int32_t, 4> kids{};
+  std::array<Pose2, 4> legs;
+  Touched t;
+  t.tables.add(id);
+  for (int i = 0; i < n; ++i) {
+    kids[static_cast<size_t>(i)] = tab.children[i];
+    legs[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
+    t.legs.add(tab.children[i]);
+    bb_.shapeletsNear(legs[static_cast<size_t>(i)].position(), t.shapelets);
+  }
+  if (t.shapelets.n >= static_cast<int>(std::size(t.shapelets.ids))) return;
+  const double log_q = logGroupBirthDensity(tab.pose, legs.data(), n);
+  if (log_q == -std::numeric_limits<double>::infinity()) return;
+  begin();
+  const double e0 = bb_.energyBefore(t);
+  for (int i = 0; i < n; ++i) bb_.killLeg(kids[static_cast<size_t>(i)]);
+  bb_.killTable(id);
+  const double e1 = bb_.energyAfter(t);
+  if (decideRj(e1 - e0, beta, std::log(n_tables) + log_q + (1.0 + n) * std::log(opt_.rj_cell))) {
+    bb_.releaseTable(id);
+    for (int i = 0; i < n; ++i) bb_.releaseLeg(kids[static_cast<size_t>(i)]);
+    return;
+  }
+  bb_.reviveTable(id);
+  for (int i = 0; i < n; ++i) bb_.reviveLeg(kids[static_cast<size_t>(i)]);
+}
+
 void Sampler::rjJitterTable(int32_t id, double beta) {
   // jitterTable's move with symmetric steps; a carried child outside every box is refused.
   const Pose2 old = bb_.table(id).pose;
@@ -1221,6 +1447,8 @@ void Sampler::rjJitterTable(int32_t id, double beta) {
     kid_new[k] = rigid ? Pose2{w.x(), w.y(), wrapPeriod(kid_old[k].theta + moved.theta - old.theta, kPi / 2)}
                        : kid_old[k];
     t.legs.add(kids[k]);
+    // Every child stays at a corner of the moved table (the state space).
+    if (!nearCorner(moved, (rigid ? kid_new[k] : kid_old[k]).position())) return;
     if (rigid) {
       if (!inSomeBox(kid_new[k])) return;
       bb_.shapeletsNear(kid_old[k].position(), t.shapelets);

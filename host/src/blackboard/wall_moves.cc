@@ -6,13 +6,18 @@
 // log joint over the walls it changes and every shapelet along their old and new segments
 // (Blackboard::collectShapeletsNearSegment), so the audit (Sampler::setAudit) checks it.
 //
-// Proposal ratios: each move writes its log q(reverse) - log q(forward) into `log_q_ratio`
-// where it is computed. Sampler::decide does not take it yet (the reversible-jump acceptance
-// is the MCMC engineer's, issue 13): search for "RJ:" to wire it in.
+// Under Acceptance::kReversibleJump the sweep (sweepReversible) runs rjWallBirthDeath, whose
+// birth draws a wall around one seed's fit with a density it can evaluate for the reverse, and
+// the two symmetric pose steps, jitterWall and extendWall (decide() applies the Metropolis-
+// Hastings rule with a log q ratio of 0 there). The other moves have no computable reverse
+// (the birth that kills legs in the new wall's solid, merge, split, death by wallMove's draw)
+// and run under the paper's acceptance only; their "RJ:" comments say why.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
+#include "crunch/blackboard/factors.h"
 #include "crunch/blackboard/sampler.h"
 
 namespace crunch {
@@ -22,11 +27,6 @@ constexpr double kLog2Pi = 1.8378770664093453;
 
 // Line-direction difference modulo pi, in [0, pi/2].
 double lineAngleDiff(double a, double b) { return std::abs(wrapPeriod(a - b, kPi)); }
-
-// log density of an isotropic 2-D Gaussian step d with spread sigma.
-double logGauss2(const Vec2& d, double sigma) {
-  return -kLog2Pi - 2.0 * std::log(sigma) - 0.5 * d.squaredNorm() / (sigma * sigma);
-}
 
 // Running sums for a total-least-squares line fit.
 struct LineFit {
@@ -49,6 +49,43 @@ struct LineFit {
 };
 }  // namespace
 
+namespace {
+// The face a..b of one wall passes strictly inside the solid band of `w`, [0, depth] behind w's
+// face and within its length (Liang-Barsky clipping of the segment in w's frame).
+bool faceInSolid(const Vec2& a, const Vec2& b, const WallHyp& w, double depth) {
+  const double len = w.length();
+  if (len <= 0.0) return false;
+  const Vec2 dir = (w.b - w.a) / len, n = w.solidNormal();
+  const Vec2 pa = a - w.a, d = b - a;
+  double lo = 0.0, hi = 1.0;
+  const auto clip = [&](double start, double rate, double min, double max) {
+    if (rate == 0.0) return start > min && start < max;
+    double t0 = (min - start) / rate, t1 = (max - start) / rate;
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::max(lo, t0);
+    hi = std::min(hi, t1);
+    return lo < hi;
+  };
+  return clip(pa.dot(dir), d.dot(dir), 0.0, len) && clip(pa.dot(n), d.dot(n), 0.0, depth);
+}
+}  // namespace
+
+bool Sampler::sharesSpace(const Vec2& a, const Vec2& b, int32_t self, int32_t below) const {
+  const double depth = bb_.params().wall_solid_depth;
+  WallHyp probe;
+  probe.a = a;
+  probe.b = b;
+  const Vec2 mid = 0.5 * (a + b);
+  const double reach = 0.5 * (b - a).norm() + depth;
+  for (int32_t o = 0; o < std::min(below, bb_.wallExtent()); ++o) {
+    const WallHyp& w = bb_.wall(o);
+    if (o == self || !w.alive) continue;
+    if (distanceToSegment(mid, w.a, w.b) > reach) continue;
+    if (faceInSolid(a, b, w, depth) || faceInSolid(w.a, w.b, probe, depth)) return true;
+  }
+  return false;
+}
+
 bool Sampler::wallExplains(const Shapelet& s) const {
   const ModelParams& p = bb_.params();
   bool yes = false;
@@ -59,11 +96,10 @@ bool Sampler::wallExplains(const Shapelet& s) const {
   return yes;
 }
 
-void Sampler::proposeWallBirth(int slot, double beta) {
+bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inliers) {
   const ModelParams& p = bb_.params();
   const Shapelet& seed = bb_.shapelet(slot);
-  if (!seed.oriented || rng_.uniform() >= opt_.wall_birth_rate) return;
-  if (wallExplains(seed)) return;
+  if (!seed.oriented) return false;
   // Inliers: oriented shapelets within three sigmas of the line in distance and angle.
   const double tol_r = 3.0 * p.sigma_r_shapelet, tol_th = 3.0 * p.sigma_theta_shapelet;
   const double leg_diag = p.leg_side * std::sqrt(2.0);
@@ -75,7 +111,7 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   Vec2 lo = c, hi = c;  // the inliers furthest back and forward along dir
   const Vec2 nrm0{-dir.y(), dir.x()};
   const double seed_side = (Vec2{seed.ox, seed.oy} - c).dot(nrm0);
-  if (seed_side == 0.0) return;
+  if (seed_side == 0.0) return false;
   double max_span = 0.0;
   inliers_.clear();
   // Window [t_from, t_to] along the current line; the first is around the seed.
@@ -124,28 +160,38 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   // Evidence no longer than a leg's face is a leg's to explain (legCanCause's converse), unless
   // a contact on it is known to lie on a longer face.
   if (fit.n < 3 || (t1 - t0 < std::max(leg_diag, p.wall_min_length) && max_span <= leg_diag))
-    return;
-  if (t1 - t0 < p.wall_min_length) return;
+    return false;
+  if (t1 - t0 < p.wall_min_length) return false;
+  p0 = c + dir * t0;
+  p1 = c + dir * t1;
+  // The free side is the left of a->b (hypotheses.h): where the seed's whisker was.
+  swapped = (p1 - p0).x() * (seed.oy - p0.y()) - (p1 - p0).y() * (seed.ox - p0.x()) < 0.0;
+  n_inliers = static_cast<int>(fit.n);
+  return true;
+}
+
+void Sampler::proposeWallBirth(int slot, double beta) {
+  const Shapelet& seed = bb_.shapelet(slot);
+  if (!seed.oriented || rng_.uniform() >= opt_.wall_birth_rate) return;
+  if (wallExplains(seed)) return;
+  Vec2 p0, p1;
+  bool swapped = false;
+  int n_inliers = 0;
+  if (!fitWallAt(slot, p0, p1, swapped, n_inliers)) return;
   const double sr = opt_.prime_sigma_r;
   const Vec2 da{rng_.normal(0, sr), rng_.normal(0, sr)}, db{rng_.normal(0, sr), rng_.normal(0, sr)};
-  Vec2 a = c + dir * t0 + da, b = c + dir * t1 + db;
+  Vec2 a = p0 + da, b = p1 + db;
   // The free side is the left of a->b (hypotheses.h): where the seed's whisker was.
   if ((b - a).x() * (seed.oy - a.y()) - (b - a).y() * (seed.ox - a.x()) < 0.0) std::swap(a, b);
-  // RJ: forward: seed chosen (rate / shapelets, and about any of the fit's inliers regrows the
-  // same line) times the Gaussian ends; reverse: this wall's death when visited (r1 of
-  // wallMove). No Jacobian: the ends are drawn directly.
-  const double log_q_ratio =
-      std::log(opt_.r1) - (std::log(opt_.wall_birth_rate * fit.n / bb_.shapeletCount()) +
-                           logGauss2(da, sr) + logGauss2(db, sr));
-  (void)log_q_ratio;
 
   // Legs standing in the new wall's solid (priming puts a leg behind every contact, the wall's
   // included) die in the same move: the wall takes over their evidence, as a new table adopts
   // the legs at its corners (proposeParent). So do their tables when no leg is left to them:
   // a table born on a wall's contacts (its other corners out in unswept space, where nothing
   // refutes it) is then one move from the wall, not a death and a birth apart across a valley.
-  // A leg whose table the move could not also track (Touched::tables full) stays. RJ: the
-  // reverse is the wall's death with those tables' and legs' births; not computed here.
+  // A leg whose table the move could not also track (Touched::tables full) stays. Not a
+  // reversible-jump move (its reverse would have to rebirth those legs and tables at their
+  // poses): the RJ sweep's wall birth is rjWallBirthDeath, which leaves legs to their own moves.
   WallHyp probe;
   probe.a = a;
   probe.b = b;
@@ -208,20 +254,27 @@ void Sampler::deathWall(int32_t id, double beta) {
 }
 
 void Sampler::jitterWall(int32_t id, double beta) {
-  // Symmetric (a Gaussian turn about the middle and a Gaussian shift across): RJ: log_q_ratio = 0.
+  // A Gaussian turn dth about the middle and a Gaussian shift s across the wall, along the
+  // normal of the mean direction (theta + dth / 2). The reverse step (-dth, -s) has the same
+  // mean direction, so it undoes the move exactly and has the same density: symmetric, and the
+  // map (middle, theta) -> (middle + s n(theta + dth / 2), theta + dth) has Jacobian 1 (the
+  // length is kept). Under kReversibleJump decide() takes it with a log q ratio of 0.
   const WallHyp w = bb_.wall(id);
+  const double len = w.length();
+  if (len <= 0) return;
   const Vec2 mid = 0.5 * (w.a + w.b), half = 0.5 * (w.b - w.a);
   const double dth = rng_.normal(0, opt_.wall_jitter_theta);
-  const Vec2 h{half.x() * std::cos(dth) - half.y() * std::sin(dth),
-               half.x() * std::sin(dth) + half.y() * std::cos(dth)};
-  const double len = w.length();
-  const Vec2 nrm = len > 0 ? Vec2{-h.y() / (0.5 * len), h.x() / (0.5 * len)} : Vec2{0, 0};
+  const double c = std::cos(dth), sn = std::sin(dth);
+  const Vec2 h{half.x() * c - half.y() * sn, half.x() * sn + half.y() * c};
+  const double mean = std::atan2(half.y(), half.x()) + 0.5 * dth;
+  const Vec2 nrm{-std::sin(mean), std::cos(mean)};
   const Vec2 m2 = mid + rng_.normal(0, opt_.wall_jitter_r) * nrm;
-  const Vec2 a = m2 - h, b = m2 + h;
-  moveWallTo(id, a, b, beta);
+  moveWallTo(id, m2 - h, m2 + h, beta);
 }
 
 void Sampler::moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta) {
+  // The reversible-jump state space has no two walls sharing space (sharesSpace).
+  if (opt_.acceptance == Acceptance::kReversibleJump && sharesSpace(a, b, id)) return;
   const WallHyp w = bb_.wall(id);
   wall_slots_.clear();
   bb_.beginCollect();
@@ -357,6 +410,102 @@ void Sampler::splitWall(int32_t id, double beta) {
   bb_.killWall(nid);
   bb_.releaseWall(nid);
   bb_.moveWall(id, w.a, w.b);
+}
+
+void Sampler::enterReversibleWalls() {
+  // No wall shorter than wall_min_length (no move makes or keeps one), none sharing space with
+  // a live wall of lower id.
+  for (int32_t id = 0; id < bb_.wallExtent(); ++id) {
+    const WallHyp& w = bb_.wall(id);
+    if (!w.alive) continue;
+    if (w.length() >= bb_.params().wall_min_length && !sharesSpace(w.a, w.b, id, id)) continue;
+    bb_.killWall(id);
+    bb_.releaseWall(id);
+  }
+}
+
+int32_t Sampler::randomLiveWall() {
+  if (bb_.liveWalls() == 0) return kNone;
+  for (;;) {
+    const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(bb_.wallExtent())));
+    if (bb_.wall(id).alive) return id;
+  }
+}
+
+namespace {
+// log N(x; 0, sigma) in one dimension.
+double logNormal1(double x, double sigma) {
+  return -0.5 * (x / sigma) * (x / sigma) - std::log(sigma) - 0.5 * kLog2Pi;
+}
+}  // namespace
+
+double Sampler::rjWallEndLogDensity(const Vec2& at, const Vec2& fit, const Vec2& dir) const {
+  const Vec2 d = at - fit;
+  const double al = d.dot(dir), ac = d.x() * dir.y() - d.y() * dir.x();
+  const double narrow = opt_.wall_end_sigma, wide = 1.0 / bb_.params().wall_cost_per_m;
+  return logAddExp(logNormal1(al, narrow), logNormal1(al, wide)) + std::log(0.5) +
+         logNormal1(ac, opt_.prime_sigma_r);
+}
+
+Vec2 Sampler::rjWallEnd(const Vec2& fit, const Vec2& dir) {
+  const double narrow = opt_.wall_end_sigma, wide = 1.0 / bb_.params().wall_cost_per_m;
+  const double al = rng_.normal(0, rng_.uniform() < 0.5 ? narrow : wide);
+  return fit + al * dir + rng_.normal(0, opt_.prime_sigma_r) * Vec2{-dir.y(), dir.x()};
+}
+
+double Sampler::logWallBirthDensity(const Vec2& a, const Vec2& b) const {
+  // log((1/N) sum_f q(a; a_f) q(b; b_f)), summed in log space.
+  double acc = -std::numeric_limits<double>::infinity();
+  for (const WallFit& f : rj_fits_)
+    acc = logAddExp(acc, rjWallEndLogDensity(a, f.a, f.dir) + rjWallEndLogDensity(b, f.b, f.dir));
+  return acc - std::log(static_cast<double>(rj_fits_.size()));
+}
+
+void Sampler::rjWallBirthDeath(double beta) {
+  const double min_len = bb_.params().wall_min_length;
+  if (rng_.uniform() < 0.5) {
+    // Birth: log q ratio = log(P(death) / n_after) - log(P(birth) q_birth(a, b)) - log cell.
+    if (rj_fits_.empty()) return;
+    const WallFit& f = rj_fits_[rng_.below(static_cast<uint32_t>(rj_fits_.size()))];
+    const Vec2 a = rjWallEnd(f.a, f.dir), b = rjWallEnd(f.b, f.dir);
+    // Outside the state space (target 0): shorter than the shortest wall, or sharing space.
+    if ((b - a).norm() < min_len || sharesSpace(a, b, kNone)) return;
+    const double log_q = logWallBirthDensity(a, b);
+    const double n_after = bb_.liveWalls() + 1.0;
+    wall_slots_.clear();
+    bb_.beginCollect();
+    bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+    Touched t;
+    begin();
+    const double e0 = bb_.energyBefore(t, wall_slots_);
+    const int32_t id = bb_.addWall(a, b);
+    t.walls.add(id);
+    const double e1 = bb_.energyAfter(t, wall_slots_);
+    if (!decideRj(e1 - e0, beta, -std::log(n_after) - log_q - std::log(opt_.rj_wall_cell))) {
+      bb_.killWall(id);
+      bb_.releaseWall(id);
+    }
+    return;
+  }
+  // Death: the negative of the birth's ratio with n_after = n.
+  if (rj_fits_.empty() || bb_.liveWalls() == 0) return;  // no birth could restore it
+  const double n = bb_.liveWalls();
+  const int32_t id = randomLiveWall();
+  const WallHyp w = bb_.wall(id);
+  const double log_q = logWallBirthDensity(w.a, w.b);
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  begin();
+  const double e0 = bb_.energyBefore(t, wall_slots_);
+  bb_.killWall(id);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
+  if (decideRj(e1 - e0, beta, std::log(n) + log_q + std::log(opt_.rj_wall_cell)))
+    bb_.releaseWall(id);
+  else
+    bb_.reviveWall(id);
 }
 
 void Sampler::pruneWalls() {

@@ -16,6 +16,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,17 @@ struct ReversibleMoves {
   // Birth of a table at a smart placement of a leg (the paper's proposeParent weights), adopting
   // every orphan leg at its corners; or death of a table, orphaning its children.
   double table_birth_death = 1.0;
+  // A whole four-legged object at once: birth of a table with a leg in a working-memory
+  // shapelet's box and a leg or none at each other corner, or death of a table with all its
+  // legs (rjTableGroup). Without it a table standing on a wall's contacts, its other corners
+  // out where nothing was sensed, is a local maximum: killing the table alone or a leg alone
+  // is uphill (docs/BLACKBOARD.md "Reversible-jump acceptance").
+  double table_group = 1.0;
+  // Walls (ModelParams::walled() only; 0 under the paper's model whatever these say): birth of
+  // a wall drawn around the segment fitted to one working-memory shapelet's collinear
+  // neighbours, or death of any wall; and a wall's symmetric pose steps (jitterWall, extendWall).
+  double wall_birth_death = 1.0;
+  double wall_jitter = 1.0;
 };
 
 struct SamplerOptions {
@@ -103,6 +115,9 @@ struct SamplerOptions {
   // (0.01 m)^2 * pi/32 ~ 1e-5 m^2 rad. It sets what beta = 1 means; the cold end does not
   // depend on it.
   double rj_cell = 1e-5;
+  // The same for a wall, whose pose is its two ends (a, b) in R^4: (sigma_r_leg^2)^2 =
+  // (0.01 m)^4 = 1e-8 m^4, each end resolved as a leg's centre is.
+  double rj_wall_cell = 1e-8;
   // Size moves of the rooms model (ModelParams::objects == kRooms; unused under kPaper):
   // Gaussian steps of a table's width and depth (one corner held fixed) and of leg sides.
   double resize_sigma = 0.03;
@@ -135,7 +150,7 @@ struct SamplerOptions {
   // their product); schedule_log_top in [-50, 50] and schedule_log_step in [0, 10] (beta stays
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
   // smart_parent_gain 0..1e6; rj_moves' weights 0..1e6, not all 0; rj_box_margin (0, 1],
-  // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell (0, 1]; resize_sigma and
+  // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell and rj_wall_cell (0, 1]; resize_sigma and
   // leg_side_sigma 0..1 m; wall_birth_rate 0..1; wall lengths 0..10 m and angles 0..pi.
   // okStatus(), or an Error naming the first bad field.
   Status validate() const;
@@ -223,6 +238,30 @@ class Sampler {
   // log q(table | leg) of rjLegTable's birth: 8 placements, each with a Gaussian step.
   double logTableBirthDensity(const Pose2& table, const Pose2& leg) const;
   void rjTableBirthDeath(double beta);
+  void rjTableGroup(double beta);
+  // log q of rjTableGroup's birth of a table at `table` with legs at `legs[0..n)` (n <= 4):
+  // summed over which leg came from a box (logLegBoxDensity; it must stand within
+  // cornerLinkRadius of a corner) and over the assignments of the others to the corners but
+  // that leg's nearest; -infinity if none can produce them.
+  double logGroupBirthDensity(const Pose2& table, const Pose2* legs, int n) const;
+  // log of the density of a leg drawn uniformly in the box of a uniformly chosen slot of
+  // rj_slots_ (summed over the boxes that hold it).
+  double logLegBoxDensity(const Pose2& leg) const;
+  // log of the density of a leg drawn at a table's corner: a Gaussian step (jitter_sigma_r,
+  // jitter_sigma_theta) from the corner and the table's axes (theta modulo pi/2).
+  double logCornerLegDensity(const Pose2& table, int corner, const Pose2& leg) const;
+  int nearestCorner(const Pose2& table, const Vec2& at) const;
+  // Walls under kReversibleJump (wall_moves.cc): the birth picks one of rj_fits_ uniformly and
+  // draws each end around the fit's end: across the fit from a normal of prime_sigma_r, along it
+  // from an even mixture of two normals, wall_end_sigma (extendWall's step) and 1 /
+  // wall_cost_per_m (the scale over which an end is free to wander beyond its last contact at
+  // beta = 1, so a wall the hot chain stretched can still be killed by the reverse). The death
+  // picks a live wall uniformly. log q_birth(a, b) = log((1/N) sum_fits q(a; a_f) q(b; b_f)).
+  double rjWallEndLogDensity(const Vec2& at, const Vec2& fit, const Vec2& dir) const;
+  Vec2 rjWallEnd(const Vec2& fit, const Vec2& dir);
+  void rjWallBirthDeath(double beta);
+  double logWallBirthDensity(const Vec2& a, const Vec2& b) const;
+  int32_t randomLiveWall();
   // `at` lies within cornerLinkRadius of a corner of a table at `table`.
   bool nearCorner(const Pose2& table, const Vec2& at) const;
   // The orphan legs within cornerLinkRadius of a corner of a table at `pose`; false if more
@@ -306,6 +345,26 @@ class Sampler {
 
   // ---- Walls (wall_moves.cc) ----
   bool walls() const { return bb_.params().walled(); }
+  // The segment a wall birth seeded at `slot` fits to the oriented shapelets collinear with it
+  // (grown along the line, refitted by total least squares; shapelets only, no hypothesis and
+  // no random draw): ends p0, p1, and whether the wall's free side (the seed's whisker's) is
+  // the left of p1 -> p0 rather than of p0 -> p1; its inliers in inliers_. False when the seed
+  // is a point contact or its evidence is a leg's (too few inliers, too short).
+  struct WallFit {
+    Vec2 a, b;  // ordered: the free side is the left of a -> b
+    Vec2 dir;   // (b - a) / |b - a|
+  };
+  bool fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inliers);
+  // A wall at a..b would share space with a live wall but `self` (of id below `below`): the
+  // face of one passes
+  // strictly inside the other's solid band (wall_solid_depth behind its face, within its
+  // length). Walls that meet at a corner do not. The reversible-jump chain's state space
+  // excludes such pairs (two solids cannot overlap; docs/BLACKBOARD.md "Walls under
+  // reversible jump"): its births and steps that would make one are refused.
+  bool sharesSpace(const Vec2& a, const Vec2& b, int32_t self,
+                   int32_t below = std::numeric_limits<int32_t>::max()) const;
+  // enterReversibleSpace's walls: kills those outside the reversible state space.
+  void enterReversibleWalls();
   // A wall explains shapelet s within three sigmas already.
   bool wallExplains(const Shapelet& s) const;
   void proposeWallBirth(int slot, double beta);
@@ -327,6 +386,7 @@ class Sampler {
   std::vector<int> rj_slots_;  // working-memory slots with a birth box (sweepReversible)
   std::vector<int32_t> wall_slots_;  // shapelets along the walls a move changes
   std::vector<int32_t> inliers_;     // a wall birth's fitted shapelets
+  std::vector<WallFit> rj_fits_;     // each working-memory seed's fit (sweepReversible)
   // axisFromPartners' partners and their weights (fixed size: a sweep allocates nothing).
   static constexpr int kMaxPartners = 32;
   // legAtPoint's directions around a point contact when negative evidence is attached.
