@@ -124,6 +124,14 @@ struct Reference {
   }
 };
 
+// A reference whose first class is the empty state: Z_0 = 1 exactly.
+Reference fromEmpty() {
+  Reference r;
+  r.z.push_back(1.0);
+  r.var.push_back(0.0);
+  return r;
+}
+
 void addEstimate(Reference& r, const std::vector<double>& w) {
   double s = 0, ss = 0;
   for (double v : w) {
@@ -168,9 +176,7 @@ TEST_CASE("Reversible jump: leg births, deaths and moves sample the number of le
   ref.pushShapelet(b);
   const double j0 = ref.totalEnergy();
   Rng rng(5);
-  Reference r;
-  r.z.push_back(1.0);
-  r.var.push_back(0.0);
+  Reference r = fromEmpty();
   const int kSamples = asanScaled(40000, 4);
   for (int n = 1; n <= 5; ++n) {
     std::vector<double> w;
@@ -269,9 +275,7 @@ TEST_CASE("Reversible jump: table births and deaths sample P(table) exactly", "[
     ref.killTable(id);
     ref.releaseTable(id);
   }
-  Reference r;
-  r.z.push_back(1.0);
-  r.var.push_back(0.0);
+  Reference r = fromEmpty();
   addEstimate(r, w);
 
   Blackboard bb(p, 1, 64);
@@ -369,9 +373,7 @@ TEST_CASE("Reversible jump: wall births, deaths and steps sample P(wall) exactly
     ref.killWall(id);
     ref.releaseWall(id);
   }
-  Reference r;
-  r.z.push_back(1.0);
-  r.var.push_back(0.0);
+  Reference r = fromEmpty();
   addEstimate(r, w);
   INFO("reference P(1 wall) " << r.p(1) << " +- " << r.se(1));
   REQUIRE(r.p(1) > 0.1);  // both states likely: the test has power
@@ -540,9 +542,7 @@ TEST_CASE("Reversible jump: whole-table births and deaths sample the table's leg
     }
     w2.push_back(v2);
   }
-  Reference r;
-  r.z.push_back(1.0);
-  r.var.push_back(0.0);
+  Reference r = fromEmpty();
   addEstimate(r, w1);
   addEstimate(r, w2);
 

@@ -234,8 +234,12 @@ void Sampler::wallMove(int32_t id, double beta) {
 }
 
 void Sampler::deathWall(int32_t id, double beta) {
-  // RJ: log_q_ratio is minus the birth's (the birth's fit rerun from this wall's inliers); not
-  // computed here: the birth's proposal is data-driven and its regrowth costs a fit.
+  // Under the paper's acceptance only (its reverse, the data-driven birth, has no density this
+  // move could evaluate; the reversible chain's death is rjWallBirthDeath's).
+  proposeWallDeath(id, beta, 0.0);
+}
+
+void Sampler::proposeWallDeath(int32_t id, double beta, double log_q_ratio) {
   const WallHyp w = bb_.wall(id);
   wall_slots_.clear();
   bb_.beginCollect();
@@ -246,11 +250,11 @@ void Sampler::deathWall(int32_t id, double beta) {
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.killWall(id);
   const double e1 = bb_.energyAfter(t, wall_slots_);
-  if (decide(e1 - e0, beta)) {
-    bb_.releaseWall(id);
-    return;
-  }
-  bb_.reviveWall(id);
+  const bool ok = opt_.acceptance == Acceptance::kReversibleJump
+                      ? decideRj(e1 - e0, beta, log_q_ratio)
+                      : decide(e1 - e0, beta);
+  if (ok) bb_.releaseWall(id);
+  else bb_.reviveWall(id);
 }
 
 void Sampler::jitterWall(int32_t id, double beta) {
@@ -491,21 +495,9 @@ void Sampler::rjWallBirthDeath(double beta) {
   if (rj_fits_.empty() || bb_.liveWalls() == 0) return;  // no birth could restore it
   const double n = bb_.liveWalls();
   const int32_t id = randomLiveWall();
-  const WallHyp w = bb_.wall(id);
-  const double log_q = logWallBirthDensity(w.a, w.b);
-  wall_slots_.clear();
-  bb_.beginCollect();
-  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
-  Touched t;
-  t.walls.add(id);
-  begin();
-  const double e0 = bb_.energyBefore(t, wall_slots_);
-  bb_.killWall(id);
-  const double e1 = bb_.energyAfter(t, wall_slots_);
-  if (decideRj(e1 - e0, beta, std::log(n) + log_q + std::log(opt_.rj_wall_cell)))
-    bb_.releaseWall(id);
-  else
-    bb_.reviveWall(id);
+  const WallHyp& w = bb_.wall(id);
+  proposeWallDeath(id, beta,
+                   std::log(n) + logWallBirthDensity(w.a, w.b) + std::log(opt_.rj_wall_cell));
 }
 
 void Sampler::pruneWalls() {

@@ -370,6 +370,9 @@ class Sampler {
   void proposeWallBirth(int slot, double beta);
   void wallMove(int32_t id, double beta);
   void deathWall(int32_t id, double beta);
+  // Proposes the death of wall `id`: under kReversibleJump accepted with log_q_ratio, else by
+  // the paper's rule.
+  void proposeWallDeath(int32_t id, double beta, double log_q_ratio);
   void jitterWall(int32_t id, double beta);
   void extendWall(int32_t id, double beta);
   void mergeWall(int32_t id, double beta);
