@@ -63,17 +63,27 @@ class SpatialHash {
   void query(const Vec2& c, double radius, F&& f) const {
     const int64_t x0 = cellOf(c.x() - radius), x1 = cellOf(c.x() + radius);
     const int64_t y0 = cellOf(c.y() - radius), y1 = cellOf(c.y() + radius);
-    // Distinct cells can share a bucket; visit each bucket once.
+    // Distinct cells can share a bucket; visit each bucket once. A 256-bit filter of the
+    // buckets visited so far answers "not seen" without the list scan in the common case (a
+    // query over a few dozen cells was spending most of its time in that scan).
     constexpr int kMaxVisited = 64;
     uint32_t visited[kMaxVisited];
     int n_visited = 0;
+    uint64_t filter[4] = {0, 0, 0, 0};
     for (int64_t cx = x0; cx <= x1; ++cx) {
       for (int64_t cy = y0; cy <= y1; ++cy) {
         const uint32_t b = bucketOf(cx, cy);
-        bool seen = false;
-        for (int i = 0; i < n_visited; ++i) seen |= (visited[i] == b);
-        if (seen) continue;
-        if (n_visited < kMaxVisited) visited[n_visited++] = b;
+        uint64_t& word = filter[(b >> 6) & 3];
+        const uint64_t bit = uint64_t{1} << (b & 63);
+        if (word & bit) {
+          bool seen = false;
+          for (int i = 0; i < n_visited; ++i) seen |= (visited[i] == b);
+          if (seen) continue;
+        }
+        if (n_visited < kMaxVisited) {
+          visited[n_visited++] = b;
+          word |= bit;
+        }
         const Bucket& bucket = buckets_[b];
         for (int i = 0; i < std::min(bucket.n, kInline); ++i) f(bucket.ids[i]);
         for (int32_t id : bucket.overflow) f(id);
