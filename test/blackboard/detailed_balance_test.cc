@@ -501,7 +501,8 @@ TEST_CASE("Reversible jump: whole-table births and deaths sample the table's leg
   const double j0 = ref.totalEnergy();
   Rng rng(41);
   std::vector<double> w1, w2;
-  const int kSamples = asanScaled(400000, 4);
+  // Under AddressSanitizer an eighth of the samples and sweeps (43 s there in full).
+  const int kSamples = asanScaled(400000, 8);
   for (int s = 0; s < kSamples; ++s) {
     const Pose2 l1 = boxes[rng.below(2)].sample(rng);
     const Pose2 t = drawTable(rng, l1);
@@ -552,7 +553,7 @@ TEST_CASE("Reversible jump: whole-table births and deaths sample the table's leg
   Rng chain_rng(43);
   Sampler sampler(bb, opt, chain_rng);
   Freq n[3], more;
-  for (int i = 0; i < asanScaled(100000, 4); ++i) {
+  for (int i = 0; i < asanScaled(100000, 8); ++i) {
     sampler.sweep(1.0);
     const int k = bb.liveTables() == 0 ? 0 : bb.liveLegs();
     for (int j = 0; j < 3; ++j) n[j].x.push_back(bb.liveTables() <= 1 && k == j);
