@@ -59,6 +59,7 @@ Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t res
 // ---------------------------------------------------------------- working memory
 
 int Blackboard::pushShapelet(const Shapelet& s) {
+  ++wm_gen_;
   const int slot = wm_next_;
   const auto i = static_cast<size_t>(slot);
   if (wm_used_[i]) {
@@ -78,6 +79,7 @@ int Blackboard::pushShapelet(const Shapelet& s) {
 
 void Blackboard::clearShapelets() {
   ++gen_;
+  ++wm_gen_;
   shapelet_hash_.clear();
   std::fill(wm_used_.begin(), wm_used_.end(), false);
   wm_next_ = 0;

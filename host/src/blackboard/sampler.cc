@@ -84,7 +84,7 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
     if (opt_.acceptance == Acceptance::kReversibleJump)
       rj_fits_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
     wall_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
-    inliers_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+    fit_memo_.resize(static_cast<size_t>(bb_.workingMemoryCapacity()));
   }
 }
 
@@ -1033,8 +1033,7 @@ void Sampler::sweepReversible(double beta) {
     for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot) {
       Vec2 p0, p1;
       bool swapped = false;
-      int n_inliers = 0;
-      if (!bb_.slotUsed(slot) || !fitWallAt(slot, p0, p1, swapped, n_inliers)) continue;
+      if (!bb_.slotUsed(slot) || !wallFitOf(slot, p0, p1, swapped)) continue;
       const Vec2 a = swapped ? p1 : p0, b = swapped ? p0 : p1;
       rj_fits_.push_back({a, b, (b - a) / (b - a).norm()});
     }

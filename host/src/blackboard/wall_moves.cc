@@ -96,7 +96,7 @@ bool Sampler::wallExplains(const Shapelet& s) const {
   return yes;
 }
 
-bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inliers) {
+bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
   const ModelParams& p = bb_.params();
   const Shapelet& seed = bb_.shapelet(slot);
   if (!seed.oriented) return false;
@@ -113,7 +113,6 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inli
   const double seed_side = (Vec2{seed.ox, seed.oy} - c).dot(nrm0);
   if (seed_side == 0.0) return false;
   double max_span = 0.0;
-  inliers_.clear();
   // Window [t_from, t_to] along the current line; the first is around the seed.
   const auto take = [&](double t_from, double t_to) {
     int added = 0;
@@ -127,7 +126,6 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inli
       const Vec2 q = Vec2{so.x, so.y} - c;
       const double t = q.dot(dir), perp = std::abs(q.x() * dir.y() - q.y() * dir.x());
       if (t < t_from || t > t_to || perp > tol_r) return;
-      if (inliers_.size() < inliers_.capacity()) inliers_.push_back(o);
       fit.add({so.x, so.y});
       max_span = std::max(max_span, so.face_span);
       if (t < (lo - c).dot(dir)) lo = {so.x, so.y};
@@ -166,8 +164,20 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inli
   p1 = c + dir * t1;
   // The free side is the left of a->b (hypotheses.h): where the seed's whisker was.
   swapped = (p1 - p0).x() * (seed.oy - p0.y()) - (p1 - p0).y() * (seed.ox - p0.x()) < 0.0;
-  n_inliers = static_cast<int>(fit.n);
   return true;
+}
+
+bool Sampler::wallFitOf(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
+  FitMemo& m = fit_memo_[static_cast<size_t>(slot)];
+  const uint64_t gen = bb_.workingMemoryGeneration();
+  if (m.gen != gen) {
+    m.gen = gen;
+    m.ok = fitWallAt(slot, m.p0, m.p1, m.swapped);
+  }
+  p0 = m.p0;
+  p1 = m.p1;
+  swapped = m.swapped;
+  return m.ok;
 }
 
 void Sampler::proposeWallBirth(int slot, double beta) {
@@ -176,8 +186,7 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   if (wallExplains(seed)) return;
   Vec2 p0, p1;
   bool swapped = false;
-  int n_inliers = 0;
-  if (!fitWallAt(slot, p0, p1, swapped, n_inliers)) return;
+  if (!wallFitOf(slot, p0, p1, swapped)) return;
   const double sr = opt_.prime_sigma_r;
   const Vec2 da{rng_.normal(0, sr), rng_.normal(0, sr)}, db{rng_.normal(0, sr), rng_.normal(0, sr)};
   Vec2 a = p0 + da, b = p1 + db;

@@ -102,6 +102,9 @@ class Blackboard {
   void clearShapelets();
   int workingMemoryCapacity() const { return static_cast<int>(wm_.size()); }
   int shapeletCount() const { return wm_count_; }
+  // Changes whenever the working memory does (a shapelet pushed, the memory cleared): what is
+  // computed from the shapelets alone may be kept while it stays the same.
+  uint64_t workingMemoryGeneration() const { return wm_gen_; }
   // Shapelets in working memory without an orientation (point contacts).
   int pointShapeletCount() const { return wm_points_; }
   bool slotUsed(int slot) const { return wm_used_[static_cast<size_t>(slot)]; }
@@ -291,6 +294,7 @@ class Blackboard {
   std::vector<bool> wm_used_;
   int wm_next_ = 0;
   int wm_count_ = 0;
+  uint64_t wm_gen_ = 1;
   int wm_points_ = 0;
   int live_tables_ = 0;
   int live_legs_ = 0;

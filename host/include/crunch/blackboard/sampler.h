@@ -348,13 +348,17 @@ class Sampler {
   // The segment a wall birth seeded at `slot` fits to the oriented shapelets collinear with it
   // (grown along the line, refitted by total least squares; shapelets only, no hypothesis and
   // no random draw): ends p0, p1, and whether the wall's free side (the seed's whisker's) is
-  // the left of p1 -> p0 rather than of p0 -> p1; its inliers in inliers_. False when the seed
-  // is a point contact or its evidence is a leg's (too few inliers, too short).
+  // the left of p1 -> p0 rather than of p0 -> p1. False when the seed is a point contact or
+  // its evidence is a leg's (too few inliers, too short).
   struct WallFit {
     Vec2 a, b;  // ordered: the free side is the left of a -> b
     Vec2 dir;   // (b - a) / |b - a|
   };
-  bool fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped, int& n_inliers);
+  bool fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped);
+  // fitWallAt's answer for `slot`, kept until the working memory changes
+  // (Blackboard::workingMemoryGeneration): the same numbers, computed once per slot and memory
+  // instead of once per proposal.
+  bool wallFitOf(int slot, Vec2& p0, Vec2& p1, bool& swapped);
   // A wall at a..b would share space with a live wall but `self` (of id below `below`): the
   // face of one passes
   // strictly inside the other's solid band (wall_solid_depth behind its face, within its
@@ -388,7 +392,13 @@ class Sampler {
   std::vector<Ref> order_;
   std::vector<int> rj_slots_;  // working-memory slots with a birth box (sweepReversible)
   std::vector<int32_t> wall_slots_;  // shapelets along the walls a move changes
-  std::vector<int32_t> inliers_;     // a wall birth's fitted shapelets
+  struct FitMemo {
+    uint64_t gen = 0;  // the working memory's generation it was computed for (0: never)
+    bool ok = false;
+    bool swapped = false;
+    Vec2 p0{0.0, 0.0}, p1{0.0, 0.0};
+  };
+  std::vector<FitMemo> fit_memo_;  // by working-memory slot (wallFitOf)
   std::vector<WallFit> rj_fits_;     // each working-memory seed's fit (sweepReversible)
   // axisFromPartners' partners and their weights (fixed size: a sweep allocates nothing).
   static constexpr int kMaxPartners = 32;
