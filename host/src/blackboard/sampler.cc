@@ -1068,16 +1068,29 @@ void Sampler::sweepReversible(double beta) {
   }
 }
 
+Pose2 Sampler::drawInBox(const Box& b) {
+  const double a = rng_.uniform(-b.u, b.u), v = rng_.uniform(b.v0, b.v1);
+  const double th = b.oriented ? b.phi + rng_.uniform(-opt_.rj_box_theta, opt_.rj_box_theta)
+                               : rng_.uniform(0.0, kPi / 2);
+  const Vec2 c = b.origin + a * b.along + v * b.in;
+  return {c.x(), c.y(), wrapPeriod(th, kPi / 2)};
+}
+
+Pose2 Sampler::drawPlacement(const Pose2& leg) {
+  const int k = static_cast<int>(rng_.below(8));
+  const double th0 = wrapPeriod(leg.theta + (k / 4) * (kPi / 2), kPi);
+  const Vec2 off = Pose2{0, 0, th0}.toWorld(bb_.params().cornerOffset(k % 4));
+  return {leg.x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
+          leg.y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
+          wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+}
+
 void Sampler::rjLegBirthDeath(int slot, double beta) {
   Box b;
   if (!boxOf(slot, b)) return;
   if (rng_.uniform() < 0.5) {
     // log_q_ratio = log(P(death) / n_after) - log(P(birth) / |B_s|) = log(|B_s| / n_after).
-    const double a = rng_.uniform(-b.u, b.u), v = rng_.uniform(b.v0, b.v1);
-    const double th = b.oriented ? b.phi + rng_.uniform(-opt_.rj_box_theta, opt_.rj_box_theta)
-                                 : rng_.uniform(0.0, kPi / 2);
-    const Vec2 c = b.origin + a * b.along + v * b.in;
-    const Pose2 pose{c.x(), c.y(), wrapPeriod(th, kPi / 2)};
+    const Pose2 pose = drawInBox(b);
     const int n_after = orphansInBox(b, 0, nullptr) + 1;
     Touched t;
     bb_.shapeletsNear(pose.position(), t.shapelets);
@@ -1203,12 +1216,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   const LegHyp l = bb_.leg(leg);
   if (l.parent == kNone) {
     // Birth of a parent table: placement k uniform of 8, then a Gaussian step.
-    const int k = static_cast<int>(rng_.below(8));
-    const double th0 = wrapPeriod(l.pose.theta + (k / 4) * (kPi / 2), kPi);
-    const Vec2 off = Pose2{0, 0, th0}.toWorld(bb_.params().cornerOffset(k % 4));
-    const Pose2 pose{l.pose.x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
-                     l.pose.y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
-                     wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+    const Pose2 pose = drawPlacement(l.pose);
     if (!nearCorner(pose, l.pose.position())) return;
     const double log_q = logTableBirthDensity(pose, l.pose);
     Touched t;
@@ -1340,19 +1348,8 @@ void Sampler::rjTableGroup(double beta) {
     Box b;
     if (!boxOf(rj_slots_[rng_.below(static_cast<uint32_t>(rj_slots_.size()))], b)) return;
     std::array<Pose2, 4> legs;
-    {
-      const double a = rng_.uniform(-b.u, b.u), v = rng_.uniform(b.v0, b.v1);
-      const double th = b.oriented ? b.phi + rng_.uniform(-opt_.rj_box_theta, opt_.rj_box_theta)
-                                   : rng_.uniform(0.0, kPi / 2);
-      const Vec2 c = b.origin + a * b.along + v * b.in;
-      legs[0] = {c.x(), c.y(), wrapPeriod(th, kPi / 2)};
-    }
-    const int k = static_cast<int>(rng_.below(8));
-    const double th0 = wrapPeriod(legs[0].theta + (k / 4) * (kPi / 2), kPi);
-    const Vec2 off = Pose2{0, 0, th0}.toWorld(bb_.params().cornerOffset(k % 4));
-    const Pose2 pose{legs[0].x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
-                     legs[0].y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
-                     wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
+    legs[0] = drawInBox(b);
+    const Pose2 pose = drawPlacement(legs[0]);
     // As rjLegTable's birth: only tables with the leg at a corner (the target's known limit,
     // docs/BLACKBOARD.md); the density below has the same indicator.
     if (!nearCorner(pose, legs[0].position())) return;

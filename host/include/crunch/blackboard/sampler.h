@@ -230,6 +230,11 @@ class Sampler {
   bool inSomeBox(const Pose2& pose) const;
   // Orphan legs in box b: the count, and the k-th (k < count) in id order.
   int orphansInBox(const Box& b, int k, int32_t* kth) const;
+  // A leg pose uniform in box b (the leg births' Q(pa(S)); density 1 / b.volume).
+  Pose2 drawInBox(const Box& b);
+  // A table at one of a leg's 8 corner placements (1/8) plus a Gaussian step (jitter_sigma_r,
+  // jitter_sigma_theta): the table births through a leg; density logTableBirthDensity.
+  Pose2 drawPlacement(const Pose2& leg);
   void rjLegBirthDeath(int slot, double beta);
   void rjJitterLeg(int32_t id, double beta);
   void rjParentChange(int32_t id, double beta);
