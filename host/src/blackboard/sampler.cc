@@ -963,10 +963,13 @@ bool Sampler::inBox(const Box& b, const Pose2& pose) const {
   return !b.oriented || std::abs(wrapPeriod(pose.theta - b.phi, kPi / 2)) <= opt_.rj_box_theta;
 }
 
-bool Sampler::inSomeBox(const Pose2& pose) const {
+double Sampler::boxReach() const {
   const double side = bb_.params().leg_side;
-  const double reach = std::hypot(0.5 * side + opt_.rj_box_margin,
-                                  0.5 * side * std::sqrt(2.0) + opt_.rj_box_margin);
+  return std::hypot(0.5 * side + opt_.rj_box_margin, 0.5 * side * std::sqrt(2.0) + opt_.rj_box_margin);
+}
+
+bool Sampler::inSomeBox(const Pose2& pose) const {
+  const double reach = boxReach();
   bool found = false;
   bb_.shapeletsWithin(pose.position(), reach, [&](int32_t slot) {
     Box b;
@@ -1266,9 +1269,7 @@ int Sampler::nearestCorner(const Pose2& table, const Vec2& at) const {
 }
 
 double Sampler::logLegBoxDensity(const Pose2& leg) const {
-  const double side = bb_.params().leg_side;
-  const double reach = std::hypot(0.5 * side + opt_.rj_box_margin,
-                                  0.5 * side * std::sqrt(2.0) + opt_.rj_box_margin);
+  const double reach = boxReach();
   double acc = -std::numeric_limits<double>::infinity();
   bb_.shapeletsWithin(leg.position(), reach, [&](int32_t slot) {
     Box b;

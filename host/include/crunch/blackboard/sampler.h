@@ -228,6 +228,8 @@ class Sampler {
   bool boxOf(int slot, Box& b) const;
   bool inBox(const Box& b, const Pose2& pose) const;
   bool inSomeBox(const Pose2& pose) const;
+  // How far from its shapelet a leg in the shapelet's box can stand (any box).
+  double boxReach() const;
   // Orphan legs in box b: the count, and the k-th (k < count) in id order.
   int orphansInBox(const Box& b, int k, int32_t* kth) const;
   // A leg pose uniform in box b (the leg births' Q(pa(S)); density 1 / b.volume).
