@@ -550,6 +550,10 @@ void Sampler::deathTableWithLegs(int32_t id, double beta) {
   // pays eps_a for each corner emptied. Either first step is uphill where the whole object is
   // not worth its evidence: a table on a wall's noisy contacts, its far legs out where nothing
   // was sensed (docs/BLACKBOARD.md "Noisy walls"). This move crosses that valley in one step.
+  proposeDeathWithLegs(id, beta, 0.0);
+}
+
+void Sampler::proposeDeathWithLegs(int32_t id, double beta, double log_q_ratio) {
   Touched t;
   t.tables.add(id);
   const TableHyp& tab = bb_.table(id);
@@ -567,7 +571,10 @@ void Sampler::deathTableWithLegs(int32_t id, double beta) {
   for (int i = 0; i < n; ++i) bb_.killLeg(kids[static_cast<size_t>(i)]);
   bb_.killTable(id);
   const double e1 = bb_.energyAfter(t);
-  if (decide(e1 - e0, beta)) {
+  const bool ok = opt_.acceptance == Acceptance::kReversibleJump
+                      ? decideRj(e1 - e0, beta, log_q_ratio)
+                      : decide(e1 - e0, beta);
+  if (ok) {
     bb_.releaseTable(id);
     for (int i = 0; i < n; ++i) bb_.releaseLeg(kids[static_cast<size_t>(i)]);
     return;
@@ -1006,19 +1013,12 @@ int Sampler::orphansInBox(const Box& b, int k, int32_t* kth) const {
 }
 
 int32_t Sampler::randomLiveLeg() {
-  if (bb_.liveLegs() == 0) return kNone;
-  for (;;) {
-    const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(bb_.legExtent())));
-    if (bb_.leg(id).alive) return id;
-  }
+  return randomLive(bb_.liveLegs(), bb_.legExtent(), [&](int32_t id) { return bb_.leg(id).alive; });
 }
 
 int32_t Sampler::randomLiveTable() {
-  if (bb_.liveTables() == 0) return kNone;
-  for (;;) {
-    const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(bb_.tableExtent())));
-    if (bb_.table(id).alive) return id;
-  }
+  return randomLive(bb_.liveTables(), bb_.tableExtent(),
+                    [&](int32_t id) { return bb_.table(id).alive; });
 }
 
 void Sampler::sweepReversible(double beta) {
@@ -1394,35 +1394,16 @@ void Sampler::rjTableGroup(double beta) {
   // Death of a table with all its legs: the negative of the birth's ratio.
   const int32_t id = randomLiveTable();
   if (id == kNone) return;
-  const double n_tables = bb_.liveTables();
   const TableHyp& tab = bb_.table(id);
   const int n = tab.n_children;
   if (n < 1 || n > 4) return;  // the birth makes one to four legs
-  std::array<int32_t, 4> kids{};
   std::array<Pose2, 4> legs;
-  Touched t;
-  t.tables.add(id);
-  for (int i = 0; i < n; ++i) {
-    kids[static_cast<size_t>(i)] = tab.children[i];
-    legs[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
-    t.legs.add(tab.children[i]);
-    bb_.shapeletsNear(legs[static_cast<size_t>(i)].position(), t.shapelets);
-  }
-  if (t.shapelets.n >= static_cast<int>(std::size(t.shapelets.ids))) return;
+  for (int i = 0; i < n; ++i) legs[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
   const double log_q = logGroupBirthDensity(tab.pose, legs.data(), n);
   if (log_q == -std::numeric_limits<double>::infinity()) return;
-  begin();
-  const double e0 = bb_.energyBefore(t);
-  for (int i = 0; i < n; ++i) bb_.killLeg(kids[static_cast<size_t>(i)]);
-  bb_.killTable(id);
-  const double e1 = bb_.energyAfter(t);
-  if (decideRj(e1 - e0, beta, std::log(n_tables) + log_q + (1.0 + n) * std::log(opt_.rj_cell))) {
-    bb_.releaseTable(id);
-    for (int i = 0; i < n; ++i) bb_.releaseLeg(kids[static_cast<size_t>(i)]);
-    return;
-  }
-  bb_.reviveTable(id);
-  for (int i = 0; i < n; ++i) bb_.reviveLeg(kids[static_cast<size_t>(i)]);
+  proposeDeathWithLegs(id, beta,
+                       std::log(static_cast<double>(bb_.liveTables())) + log_q +
+                           (1.0 + n) * std::log(opt_.rj_cell));
 }
 
 void Sampler::rjJitterTable(int32_t id, double beta) {

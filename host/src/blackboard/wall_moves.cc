@@ -438,11 +438,7 @@ void Sampler::enterReversibleWalls() {
 }
 
 int32_t Sampler::randomLiveWall() {
-  if (bb_.liveWalls() == 0) return kNone;
-  for (;;) {
-    const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(bb_.wallExtent())));
-    if (bb_.wall(id).alive) return id;
-  }
+  return randomLive(bb_.liveWalls(), bb_.wallExtent(), [&](int32_t id) { return bb_.wall(id).alive; });
 }
 
 namespace {

@@ -286,6 +286,16 @@ class Sampler {
   // A live id of the pool, uniformly (rejection over the extent); kNone if none is live.
   int32_t randomLiveLeg();
   int32_t randomLiveTable();
+  // A uniformly drawn id in [0, extent) for which alive(id) holds (rejection); kNone when
+  // `live` (their number) is 0. The three above share it.
+  template <typename Alive>
+  int32_t randomLive(int live, int32_t extent, Alive&& alive) {
+    if (live == 0) return kNone;
+    for (;;) {
+      const auto id = static_cast<int32_t>(rng_.below(static_cast<uint32_t>(extent)));
+      if (alive(id)) return id;
+    }
+  }
   void primeLeg(int slot, double beta);
   // primeLeg's leg for an oriented shapelet (on its face) and for a point contact.
   // `side` is the leg's side: the paper's one, or the rooms model's draw.
@@ -312,6 +322,9 @@ class Sampler {
   // The walled models' other table death: the table and its legs die together, the reverse of
   // a table born with its legs (proposeParent's adoption, then proposeChild; the pool's start).
   void deathTableWithLegs(int32_t id, double beta);
+  // The death of table `id` with all its legs: under kReversibleJump accepted with
+  // log_q_ratio (rjTableGroup), else by the paper's rule (deathTableWithLegs).
+  void proposeDeathWithLegs(int32_t id, double beta, double log_q_ratio);
   void deathLeg(int32_t id, double beta);
   void parentChange(int32_t leg, double beta);
   // A pose move's target: Gaussian steps in x, y and theta (theta kept modulo `period`).
