@@ -144,7 +144,7 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
          },
          "objects the map may hold: paper (one table size, no walls; the paper's figures) | "
          "walls (the paper's table and walls) | rooms (walls, four-legged objects of any size)")
-      ->default_str("walls");
+      ->default_str(crunch::objectModelName(crunch::defaultMappingModel().objects));
   app.add_option_function<std::string>(
          "--chain-fusion",
          [&opt](const std::string& name) {
