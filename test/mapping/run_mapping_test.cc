@@ -5,6 +5,8 @@
 #include <limits>
 #include <vector>
 
+#include "crunch/robot/whiskers.h"
+
 using namespace crunch;
 
 namespace {
@@ -68,4 +70,28 @@ TEST_CASE("Pipeline: extreme noise gives a valid, possibly empty, map", "[mappin
   }
   for (const PoseMap& pm : map.per_pose)
     for (const MapTable& t : pm.tables) CHECK(std::isfinite(t.pose.x));
+}
+
+TEST_CASE("Pipeline: the floor under the robot at every pose is free space", "[mapping]") {
+  // No contact and no whisker ray: whatever the map's free space holds came from the body.
+  ScriptedSensor sensor({});
+  const std::vector<Pose2> poses = {{1.0, 1.0, 0.0}, {2.0, 1.5, 1.0}};
+  const auto swept = [](const Map& m, const Vec2& p) {
+    const FreeSpaceLayer& f = m.free_space;
+    if (f.empty()) return false;
+    const Vec2 c = (p - f.origin) / f.cell;
+    return f.at(static_cast<int>(std::floor(c.x())), static_cast<int>(std::floor(c.y())));
+  };
+  MappingOptions opt;
+  const Map map = runMapping(sensor, poses, 0, opt).value();
+  for (const Pose2& p : poses) {
+    CHECK(swept(map, p.position()));
+    CHECK(swept(map, p.position() + Vec2(0.9 * kRobotRadius, 0.0)));
+    CHECK(swept(map, p.position() + Vec2(0.0, -0.9 * kRobotRadius)));
+    CHECK_FALSE(swept(map, p.position() + Vec2(1.2 * kRobotRadius, 0.0)));
+  }
+  CHECK_FALSE(swept(map, {1.5, 1.25}));  // between the poses: teleported, nothing swept
+  // The body is evidence only with negative evidence and the body sweep on.
+  opt.body_sweep = false;
+  CHECK(runMapping(sensor, poses, 0, opt).value().free_space.empty());
 }

@@ -158,9 +158,13 @@ TEST_CASE("Failure scenes: tables touching each other", "[app][scenes]") {
   // 0.75 (3 of 4), precision 0.6, 2 wall phantoms, 6.0 mm mean error, peak 11 tables / 75 legs,
   // 0.87 s; seeds 2, 3: recall 0.5, 0.5, precision 0.5, 1.0, error 3.2, 5.4 mm, peak 13, 12.
   // Bounds: recall >= 0.5 (one table fewer; seeds 2-3's), precision >= 0.4, <= 4 wall phantoms,
-  // <= 1 elsewhere, error <= 10 mm, peak tables <= 20.
+  // <= 1 elsewhere, error <= 10 mm, peak tables <= 20. Since the robot's disc at every pose is
+  // free space (run_mapping.h) seeds 1-3 give precision 0.33, 0.33, 1.0 (4, 4, 0 wall
+  // phantoms; recall 0.5 each, error 4.2-6.3 mm, peak 13, 13, 10): the paper's model, without
+  // walls, moves its phantoms to other wall contacts (over seeds 1-5 its wall phantoms went
+  // from 9 to 13, docs/RESULTS.md "The body at every pose"), so precision >= 0.3.
   checkScene("adjacent_tables", {.min_recall = 0.5,
-                                 .min_precision = 0.4,
+                                 .min_precision = 0.3,
                                  .max_wall_phantoms = 4,
                                  .max_other_phantoms = 1,
                                  .max_position_error = 0.010,

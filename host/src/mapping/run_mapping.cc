@@ -42,6 +42,9 @@ Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int
     sensor.sense(poses[t], sense_rng, reports);
     free_rays.clear();
     sensor.freeRays(free_rays);
+    // The body stands here (teleported: it swept nothing on the way), before this pose's
+    // annealing weighs the free space.
+    mapper.addBodySweep(poses[t].position(), poses[t].position());
     mapper.addPose(poses[t], reports, free_rays);
     if (observe) observe(mapper, poses[t]);
     if (options.progress) options.progress(static_cast<int>(t + 1), static_cast<int>(poses.size()));

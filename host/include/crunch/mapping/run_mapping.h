@@ -18,6 +18,8 @@ class Mapper;  // mapper.h
 // `skipped` says how many were dropped). Deterministic for a given seed: sensor noise and the
 // sampler draw from separate streams, so sampler settings do not change the sensed data.
 // Inference runs at poses that sensed at least one new shapelet; per_pose lists those poses.
+// The robot's body stands at every pose, so its disc is free space (Mapper::addBodySweep with
+// the pose as both ends, options.body_sweep): no leg or table corner stands where the robot was.
 // An Error (nothing sensed) when options.validate() fails.
 Result<Map> runMapping(SensorModel& sensor, const std::vector<Pose2>& poses, int skipped,
                const MappingOptions& options);
