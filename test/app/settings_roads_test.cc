@@ -58,9 +58,7 @@ TEST_CASE("Settings: a bad value on the --sim command line is exit 2, named, not
                           Case{"--smart-gain nan", "smart_parent_gain"},
                           Case{"--smart-gain -100", "smart_parent_gain"},
                           Case{"--noise bogus", "noise"},
-                          // rj's move set has no size moves (issue 13): refused, not silently
-                          // run as the walls model.
-                          Case{"--model rooms --acceptance rj", "acceptance"});
+                          Case{"--acceptance bogus", "acceptance"});
   expectRefused("--sim", c);
 }
 
@@ -147,7 +145,7 @@ TEST_CASE("Settings: a bad value in a sweep grid is exit 2, named, nothing writt
                           Case{"--sweeps 0", "sweeps_per_temperature"},
                           Case{"--noise realistic,bogus", "bogus"},
                           Case{"--noise-scale 1,1e9", "sigma_r"},
-                          Case{"--model paper,rooms --acceptance rj", "acceptance"});
+                          Case{"--model paper,bogus", "model"});
   expectRefused("sweep", c);
 }
 

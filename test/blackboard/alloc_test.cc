@@ -52,12 +52,17 @@ TEST_CASE("Sampler: the rooms model's size moves perform no heap allocation afte
           "[blackboard]") {
   ModelParams p;
   p.objects = ObjectModel::kRooms;
+  // Both acceptances: the reversible jump's births draw sizes and its size kernel steps them.
+  const Acceptance acceptance = GENERATE(Acceptance::kTempered, Acceptance::kReversibleJump);
+  INFO("acceptance " << acceptanceName(acceptance));
   Blackboard bb(p, 9, 1024);
   FreeSpaceGrid free({0, 0}, {4, 4});
   free.addRay({{0.2, 0.2}, {3.8, 3.8}});
   bb.setFreeSpace(&free);
   Rng rng(9);
-  Sampler sampler(bb, {}, rng);
+  SamplerOptions so;
+  so.acceptance = acceptance;
+  Sampler sampler(bb, so, rng);
   // A desk, a chair, a stool and a standard table: every size move and the sized parent
   // proposal find partners.
   struct Object {

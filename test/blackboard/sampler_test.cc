@@ -426,11 +426,16 @@ TEST_CASE("Rooms model: every move's local energy change equals the brute-force 
     bb.pushShapelet(s);
   for (const auto& s : TableShapelets({2.8, 2.6, 0.0}, objectOfSize(0.6, 0.6, 0.04), {0, 2}))
     bb.pushShapelet(s);
+  // Both acceptances: the reversible jump's births of sized tables and its size kernel.
+  const Acceptance acceptance = GENERATE(Acceptance::kTempered, Acceptance::kReversibleJump);
+  INFO("acceptance " << acceptanceName(acceptance));
   Rng rng(13);
   SamplerOptions opt;
+  opt.acceptance = acceptance;
   opt.prime_sigma_r = 0.02;  // sloppy proposals: more overlaps, rivals and shared corners
   Sampler sampler(bb, opt, rng);
   sampler.setAudit(true);
+  if (acceptance == Acceptance::kReversibleJump) sampler.enterReversibleSpace();
   bool resized = false;
   for (double beta : {0.05, 0.3, 1.0, 5.0}) {
     for (int i = 0; i < 10; ++i) {
@@ -438,7 +443,7 @@ TEST_CASE("Rooms model: every move's local energy change equals the brute-force 
       for (int32_t id = 0; id < bb.tableExtent(); ++id)
         resized |= bb.table(id).alive && std::abs(bb.table(id).width - p.table_width) > 1e-6;
     }
-    sampler.prune();
+    if (acceptance != Acceptance::kReversibleJump) sampler.prune();  // rj never prunes
   }
   CHECK(resized);  // tables of other sizes than the paper's were proposed and kept
   CHECK(sampler.stats().proposals > 1000);

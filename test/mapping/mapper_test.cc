@@ -436,19 +436,17 @@ TEST_CASE("Mapper: threads is validated, 0 meaning one per core", "[mapping][map
   }
 }
 
-TEST_CASE("MappingOptions: rj acceptance with the paper's and the walls model only", "[mapping]") {
-  // Sampler::sweepReversible has wall moves but no size moves: under the rooms model rj would
-  // never resize a table, so that combination is refused rather than run as the walls model.
+TEST_CASE("MappingOptions: rj acceptance with every object model", "[mapping]") {
+  // Sampler::sweepReversible has the walls' moves and the rooms model's size steps.
   MappingOptions o;
   o.sampler.acceptance = Acceptance::kReversibleJump;
-  CHECK(o.validate());  // the default model is walls
-  o.model.objects = ObjectModel::kPaper;
-  CHECK(o.validate());
-  o.model.objects = ObjectModel::kRooms;
+  for (const ObjectModel m : {ObjectModel::kPaper, ObjectModel::kWalls, ObjectModel::kRooms}) {
+    o.model.objects = m;
+    CHECK(o.validate());
+  }
+  o.sampler.rj_moves.sizes = -1.0;
   REQUIRE_FALSE(o.validate());
-  CHECK(o.validate().error().message.find("acceptance") != std::string::npos);
-  o.sampler.acceptance = Acceptance::kLiteral;
-  CHECK(o.validate());
+  CHECK(o.validate().error().message.find("rj_moves.sizes") != std::string::npos);
 }
 
 TEST_CASE("Mapper: a run without shapelets has no live hypotheses", "[mapping][mapper]") {

@@ -35,7 +35,7 @@ session::RobotSessionOptions unusualOptions() {
   m.global_chains = 3;
   m.chain_fusion = ChainFusion::kMarginal;  // not the session's default (the vote)
   m.marginal_steps = 3;
-  // Not the default (the paper's Gibbs conditional); rj is refused with the rooms model.
+  // Not the default (the paper's Gibbs conditional).
   m.sampler.acceptance = Acceptance::kLiteral;
   m.model.objects = ObjectModel::kRooms;  // not the default (the paper's)
   session::RobotSessionOptions s = session::sessionOptions(shippedModels(), m, 42);
@@ -137,8 +137,8 @@ TEST_CASE("Session settings: a bad value in the metadata is an error naming the 
     CHECK(errorOf(withSetting(good, "mapping.working_memory", 7.5)).find("working_memory") !=
           std::string::npos);
   }
-  SECTION("rj acceptance with the rooms model (rj has no size moves yet)") {
-    CHECK(errorOf(withSetting(good, "mapping.acceptance", "rj")).find("acceptance") !=
+  SECTION("an unknown acceptance") {
+    CHECK(errorOf(withSetting(good, "mapping.acceptance", "bogus")).find("acceptance") !=
           std::string::npos);
   }
   SECTION("an area of 1e308 m") {

@@ -33,6 +33,7 @@ Status SamplerOptions::validate() const {
       checkRange("rj_moves.table_group", rj_moves.table_group, 0.0, 1e6),
       checkRange("rj_moves.wall_birth_death", rj_moves.wall_birth_death, 0.0, 1e6),
       checkRange("rj_moves.wall_jitter", rj_moves.wall_jitter, 0.0, 1e6),
+      checkRange("rj_moves.sizes", rj_moves.sizes, 0.0, 1e6),
       checkAbove("rj_box_margin", rj_box_margin, 0.0, 1.0),
       checkAbove("rj_box_theta", rj_box_theta, 0.0, kPi / 4),
       checkCount("rj_steps_per_shapelet", rj_steps_per_shapelet, 1, 1000),
@@ -52,7 +53,8 @@ Status SamplerOptions::validate() const {
   }
   const ReversibleMoves& m = rj_moves;
   if (m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table + m.table_jitter +
-          m.table_birth_death + m.table_group + m.wall_birth_death + m.wall_jitter <= 0.0)
+          m.table_birth_death + m.table_group + m.wall_birth_death + m.wall_jitter + m.sizes <=
+      0.0)
     return Error{"rj_moves: every weight is 0 (at least one must be positive)"};
   return okStatus();
 }
@@ -911,7 +913,7 @@ void Sampler::enterReversibleSpace() {
   // moves) leaves it: it stays, an orphan.
   for (int32_t id = 0; id < bb_.legExtent(); ++id) {
     const LegHyp& l = bb_.leg(id);
-    if (l.alive && l.parent != kNone && !nearCorner(bb_.table(l.parent).pose, l.pose.position()))
+    if (l.alive && l.parent != kNone && !nearCorner(bb_.table(l.parent), l.pose.position()))
       bb_.setParent(id, kNone);
   }
   for (int32_t id = 0; id < bb_.tableExtent(); ++id) {
@@ -1041,8 +1043,13 @@ void Sampler::sweepReversible(double beta) {
       rj_fits_.push_back({a, b, (b - a) / (b - a).norm()});
     }
   }
+  // The smart birth places tables of the model's one size only; the rooms model's sizes move by
+  // their own symmetric steps.
+  const bool sized = bb_.params().sized();
+  const double smart_bd = sized ? 0.0 : m.table_birth_death;
+  const double sizes = sized ? m.sizes : 0.0;
   const double total = m.leg_birth_death + m.leg_jitter + m.leg_parent + m.leg_table +
-                       m.table_jitter + m.table_birth_death + m.table_group + wall_bd + wall_jit;
+                       m.table_jitter + smart_bd + m.table_group + wall_bd + wall_jit + sizes;
   if (total <= 0.0) return;
   const int steps = opt_.rj_steps_per_shapelet * std::max<int>(1, static_cast<int>(rj_slots_.size()));
   for (int i = 0; i < steps; ++i) {
@@ -1058,12 +1065,14 @@ void Sampler::sweepReversible(double beta) {
       if (const int32_t id = randomLiveLeg(); id != kNone) rjLegTable(id, beta);
     } else if ((u -= m.table_jitter) < 0.0) {
       if (const int32_t id = randomLiveTable(); id != kNone) rjJitterTable(id, beta);
-    } else if ((u -= m.table_birth_death) < 0.0) {
+    } else if ((u -= smart_bd) < 0.0) {
       rjTableBirthDeath(beta);
     } else if ((u -= m.table_group) < 0.0) {
       rjTableGroup(beta);
     } else if ((u -= wall_bd) < 0.0) {
       rjWallBirthDeath(beta);
+    } else if ((u -= sizes) < 0.0) {
+      rjSizeStep(beta);
     } else if (const int32_t id = randomLiveWall(); id != kNone) {
       if (rng_.uniform() < 0.5) jitterWall(id, beta);
       else extendWall(id, beta);
@@ -1079,10 +1088,36 @@ Pose2 Sampler::drawInBox(const Box& b) {
   return {c.x(), c.y(), wrapPeriod(th, kPi / 2)};
 }
 
-Pose2 Sampler::drawPlacement(const Pose2& leg) {
+TableHyp Sampler::drawTableSize() {
+  const ModelParams& p = bb_.params();
+  TableHyp t;
+  t.width = p.table_width;
+  t.depth = p.table_depth;
+  t.leg = p.leg_side;
+  if (!p.sized()) return t;
+  // Uniform over S = {min_side <= shorter <= max_short, longer <= max_long} (both orders): the
+  // shorter side by inverting its marginal's CDF (density proportional to max_long - shorter),
+  // the longer uniform above it, then which of width and depth is the shorter.
+  const double m = p.size_min_side, ms = p.size_max_short, ml = p.size_max_long;
+  const double a2 = (ml - m) * (ml - m), b2 = (ml - ms) * (ml - ms);
+  const double lo = ml - std::sqrt(a2 - rng_.uniform() * (a2 - b2));
+  const double hi = rng_.uniform(lo, ml);
+  const bool wide = rng_.uniform() < 0.5;
+  t.width = wide ? hi : lo;
+  t.depth = wide ? lo : hi;
+  t.leg = drawLegSide();
+  return t;
+}
+
+double Sampler::drawLegSide() {
+  const ModelParams& p = bb_.params();
+  return p.sized() ? rng_.uniform(p.leg_min, p.leg_max) : p.leg_side;
+}
+
+Pose2 Sampler::drawPlacement(const Pose2& leg, const TableHyp& shape) {
   const int k = static_cast<int>(rng_.below(8));
   const double th0 = wrapPeriod(leg.theta + (k / 4) * (kPi / 2), kPi);
-  const Vec2 off = Pose2{0, 0, th0}.toWorld(bb_.params().cornerOffset(k % 4));
+  const Vec2 off = Pose2{0, 0, th0}.toWorld(shape.cornerOffset(k % 4));
   return {leg.x - off.x() + rng_.normal(0, opt_.jitter_sigma_r),
           leg.y - off.y() + rng_.normal(0, opt_.jitter_sigma_r),
           wrapPeriod(th0 + rng_.normal(0, opt_.jitter_sigma_theta), kPi)};
@@ -1099,7 +1134,7 @@ void Sampler::rjLegBirthDeath(int slot, double beta) {
     bb_.shapeletsNear(pose.position(), t.shapelets);
     begin();
     const double e0 = bb_.energyBefore(t);
-    const int32_t id = bb_.addLeg(pose, kNone);
+    const int32_t id = bb_.addLeg(pose, drawLegSide(), kNone);
     t.legs.add(id);
     const double e1 = bb_.energyAfter(t);
     if (!decideRj(e1 - e0, beta, std::log(b.volume / (n_after * opt_.rj_cell)))) {
@@ -1131,7 +1166,7 @@ void Sampler::rjJitterLeg(int32_t id, double beta) {
   // Outside the state space (target 0, rejected): in no box, or off its table's corners.
   const int32_t parent = bb_.leg(id).parent;
   if (!inSomeBox(moved)) return;
-  if (parent != kNone && !nearCorner(bb_.table(parent).pose, moved.position())) return;
+  if (parent != kNone && !nearCorner(bb_.table(parent), moved.position())) return;
   Touched t;
   t.legs.add(id);
   t.tables.add(bb_.leg(id).parent);
@@ -1184,13 +1219,13 @@ void Sampler::rjParentChange(int32_t leg, double beta) {
   if (!decideRj(e1 - e0, beta, log_rev - log_fwd)) bb_.setParent(leg, old_parent);
 }
 
-double Sampler::logTableBirthDensity(const Pose2& table, const Pose2& leg) const {
-  const ModelParams& p = bb_.params();
+double Sampler::logTableBirthDensity(const TableHyp& shape, const Pose2& leg) const {
+  const Pose2& table = shape.pose;
   const double sr = opt_.jitter_sigma_r, st = opt_.jitter_sigma_theta;
   double acc = -std::numeric_limits<double>::infinity();
   for (int k = 0; k < 8; ++k) {
     const double th = wrapPeriod(leg.theta + (k / 4) * (kPi / 2), kPi);
-    const Vec2 off = Pose2{0, 0, th}.toWorld(p.cornerOffset(k % 4));
+    const Vec2 off = Pose2{0, 0, th}.toWorld(shape.cornerOffset(k % 4));
     const double dx = table.x - (leg.x - off.x()), dy = table.y - (leg.y - off.y());
     // Wrapped normal of period pi: the nearest three windings (sigma << pi).
     double dth = wrapPeriod(table.theta - th, kPi);
@@ -1207,26 +1242,40 @@ double Sampler::logTableBirthDensity(const Pose2& table, const Pose2& leg) const
   return acc;
 }
 
-bool Sampler::nearCorner(const Pose2& table, const Vec2& at) const {
-  const ModelParams& p = bb_.params();
-  const double r = p.cornerLinkRadius();
+bool Sampler::nearCorner(const TableHyp& table, const Vec2& at) const {
+  const double r = bb_.params().cornerLinkRadius();
   for (int c = 0; c < 4; ++c)
-    if ((table.toWorld(p.cornerOffset(c)) - at).squaredNorm() <= r * r) return true;
+    if ((table.corner(c) - at).squaredNorm() <= r * r) return true;
   return false;
+}
+
+bool Sampler::childrenAtCorners(const TableHyp& table) const {
+  for (int i = 0; i < table.n_children; ++i)
+    if (!nearCorner(table, bb_.leg(table.children[i]).pose.position())) return false;
+  return true;
+}
+
+TableHyp Sampler::shaped(const TableHyp& shape, const Pose2& pose) {
+  TableHyp t = shape;
+  t.pose = pose;
+  return t;
 }
 
 void Sampler::rjLegTable(int32_t leg, double beta) {
   const LegHyp l = bb_.leg(leg);
   if (l.parent == kNone) {
-    // Birth of a parent table: placement k uniform of 8, then a Gaussian step.
-    const Pose2 pose = drawPlacement(l.pose);
-    if (!nearCorner(pose, l.pose.position())) return;
-    const double log_q = logTableBirthDensity(pose, l.pose);
+    // Birth of a parent table: its size from the prior (the rooms model), placement k uniform
+    // of 8, then a Gaussian step. The size's reference measure is the prior itself, so drawing
+    // from it adds nothing to the ratio (sampler.cc's top).
+    const TableHyp shape = drawTableSize();
+    const TableHyp born = shaped(shape, drawPlacement(l.pose, shape));
+    if (!nearCorner(born, l.pose.position())) return;
+    const double log_q = logTableBirthDensity(born, l.pose);
     Touched t;
     t.legs.add(leg);
     begin();
     const double e0 = bb_.energyBefore(t);
-    const int32_t table = bb_.addTable(pose);
+    const int32_t table = bb_.addTable(born.pose, born.width, born.depth, born.leg);
     bb_.setParent(leg, table);
     t.tables.add(table);
     const double e1 = bb_.energyAfter(t);
@@ -1241,8 +1290,8 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   const TableHyp& tab = bb_.table(l.parent);
   if (tab.n_children != 1) return;  // not the sole child: nothing this kernel can do
   const int32_t table = l.parent;
-  if (!nearCorner(tab.pose, l.pose.position())) return;  // the birth could not have made it
-  const double log_q = logTableBirthDensity(tab.pose, l.pose);
+  if (!nearCorner(tab, l.pose.position())) return;  // the birth could not have made it
+  const double log_q = logTableBirthDensity(tab, l.pose);
   Touched t;
   t.legs.add(leg);
   t.tables.add(table);
@@ -1254,12 +1303,11 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   else bb_.reviveTable(table);
 }
 
-int Sampler::nearestCorner(const Pose2& table, const Vec2& at) const {
-  const ModelParams& p = bb_.params();
+int Sampler::nearestCorner(const TableHyp& table, const Vec2& at) const {
   int best = 0;
   double best_d2 = std::numeric_limits<double>::infinity();
   for (int c = 0; c < 4; ++c) {
-    const double d2 = (table.toWorld(p.cornerOffset(c)) - at).squaredNorm();
+    const double d2 = (table.corner(c) - at).squaredNorm();
     if (d2 < best_d2) {
       best_d2 = d2;
       best = c;
@@ -1278,11 +1326,11 @@ double Sampler::logLegBoxDensity(const Pose2& leg) const {
   return acc - std::log(static_cast<double>(std::max<size_t>(1, rj_slots_.size())));
 }
 
-double Sampler::logCornerLegDensity(const Pose2& table, int corner, const Pose2& leg) const {
+double Sampler::logCornerLegDensity(const TableHyp& table, int corner, const Pose2& leg) const {
   const double sr = opt_.jitter_sigma_r, st = opt_.jitter_sigma_theta;
-  const Vec2 d = leg.position() - table.toWorld(bb_.params().cornerOffset(corner));
+  const Vec2 d = leg.position() - table.corner(corner);
   // Wrapped normal of period pi/2: the nearest three windings (sigma << pi/2).
-  double dth = wrapPeriod(leg.theta - table.theta, kPi / 2);
+  double dth = wrapPeriod(leg.theta - table.pose.theta, kPi / 2);
   if (dth > kPi / 4) dth -= kPi / 2;
   double wrap = -std::numeric_limits<double>::infinity();
   for (int j = -1; j <= 1; ++j) {
@@ -1293,7 +1341,7 @@ double Sampler::logCornerLegDensity(const Pose2& table, int corner, const Pose2&
          std::log(std::sqrt(2 * kPi) * st);
 }
 
-double Sampler::logGroupBirthDensity(const Pose2& table, const Pose2* legs, int n) const {
+double Sampler::logGroupBirthDensity(const TableHyp& table, const Pose2* legs, int n) const {
   const double neg_inf = -std::numeric_limits<double>::infinity();
   if (n < 1 || n > 4) return neg_inf;
   const double half = std::log(0.5);
@@ -1349,34 +1397,41 @@ void Sampler::rjTableGroup(double beta) {
     Box b;
     if (!boxOf(rj_slots_[rng_.below(static_cast<uint32_t>(rj_slots_.size()))], b)) return;
     std::array<Pose2, 4> legs;
+    std::array<double, 4> sides{};
     legs[0] = drawInBox(b);
-    const Pose2 pose = drawPlacement(legs[0]);
+    sides[0] = drawLegSide();
+    // The size from the prior (rooms model; its reference measure: the ratio gains nothing).
+    const TableHyp shape = drawTableSize();
+    const TableHyp born = shaped(shape, drawPlacement(legs[0], shape));
+    const Pose2& pose = born.pose;
     // As rjLegTable's birth: only tables with the leg at a corner (the target's known limit,
     // docs/BLACKBOARD.md); the density below has the same indicator.
-    if (!nearCorner(pose, legs[0].position())) return;
-    const int c1 = nearestCorner(pose, legs[0].position());
+    if (!nearCorner(born, legs[0].position())) return;
+    const int c1 = nearestCorner(born, legs[0].position());
     int n = 1;
     for (int c = 0; c < 4; ++c) {
       if (c == c1 || rng_.uniform() < 0.5) continue;
-      const Vec2 at = pose.toWorld(bb_.params().cornerOffset(c));
+      const Vec2 at = born.corner(c);
       const Pose2 leg{at.x() + rng_.normal(0, opt_.jitter_sigma_r),
                       at.y() + rng_.normal(0, opt_.jitter_sigma_r),
                       wrapPeriod(pose.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi / 2)};
       if (!inSomeBox(leg)) return;  // outside the state space: target 0
+      sides[static_cast<size_t>(n)] = drawLegSide();
       legs[static_cast<size_t>(n++)] = leg;
     }
-    const double log_q = logGroupBirthDensity(pose, legs.data(), n);
+    const double log_q = logGroupBirthDensity(born, legs.data(), n);
     Touched t;
     for (int i = 0; i < n; ++i) bb_.shapeletsNear(legs[static_cast<size_t>(i)].position(), t.shapelets);
     if (t.shapelets.n >= static_cast<int>(std::size(t.shapelets.ids))) return;
     const double n_after = bb_.liveTables() + 1.0;
     begin();
     const double e0 = bb_.energyBefore(t);
-    const int32_t table = bb_.addTable(pose);
+    const int32_t table = bb_.addTable(pose, born.width, born.depth, born.leg);
     t.tables.add(table);
     std::array<int32_t, 4> ids{};
     for (int i = 0; i < n; ++i) {
-      ids[static_cast<size_t>(i)] = bb_.addLeg(legs[static_cast<size_t>(i)], table);
+      ids[static_cast<size_t>(i)] =
+          bb_.addLeg(legs[static_cast<size_t>(i)], sides[static_cast<size_t>(i)], table);
       t.legs.add(ids[static_cast<size_t>(i)]);
     }
     const double e1 = bb_.energyAfter(t);
@@ -1399,7 +1454,7 @@ void Sampler::rjTableGroup(double beta) {
   if (n < 1 || n > 4) return;  // the birth makes one to four legs
   std::array<Pose2, 4> legs;
   for (int i = 0; i < n; ++i) legs[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
-  const double log_q = logGroupBirthDensity(tab.pose, legs.data(), n);
+  const double log_q = logGroupBirthDensity(tab, legs.data(), n);
   if (log_q == -std::numeric_limits<double>::infinity()) return;
   proposeDeathWithLegs(id, beta,
                        std::log(static_cast<double>(bb_.liveTables())) + log_q +
@@ -1414,6 +1469,7 @@ void Sampler::rjJitterTable(int32_t id, double beta) {
   Touched t;
   t.tables.add(id);
   const TableHyp& tab = bb_.table(id);
+  const TableHyp moved_tab = shaped(tab, moved);
   const int n = tab.n_children;
   std::array<int32_t, kMaxChildren> kids;
   std::array<Pose2, kMaxChildren> kid_old, kid_new;
@@ -1426,7 +1482,7 @@ void Sampler::rjJitterTable(int32_t id, double beta) {
                        : kid_old[k];
     t.legs.add(kids[k]);
     // Every child stays at a corner of the moved table (the state space).
-    if (!nearCorner(moved, (rigid ? kid_new[k] : kid_old[k]).position())) return;
+    if (!nearCorner(moved_tab, (rigid ? kid_new[k] : kid_old[k]).position())) return;
     if (rigid) {
       if (!inSomeBox(kid_new[k])) return;
       bb_.shapeletsNear(kid_old[k].position(), t.shapelets);
@@ -1580,8 +1636,9 @@ void Sampler::rjTableBirthDeath(double beta) {
 // ---------------------------------------------------------------- the rooms model's size moves
 //
 // Each move below writes log_q_ratio = log q(reverse) - log q(forward), the proposal's part of a
-// Metropolis-Hastings ratio, where it can be computed. Sampler::decide does not use it yet (the
-// reversible-jump acceptance is another change); it is here so that change can.
+// Metropolis-Hastings ratio, where it can be computed. The three size steps are symmetric (0):
+// under kReversibleJump decide() takes them with that ratio (rjSizeStep); proposeParentSized's
+// density is unknown and it does not fire there.
 
 void Sampler::resizeTable(int32_t id, double beta) {
   const ModelParams& p = bb_.params();
@@ -1601,6 +1658,8 @@ void Sampler::resizeTable(int32_t id, double beta) {
   // one (corner k's world position is unchanged by construction). The map (pose, w, d) ->
   // (pose', w', d') for a given step is a translation: Jacobian 1.
   [[maybe_unused]] const double log_q_ratio = 0.0;
+  // Under reversible jump every child stays at a corner (the state space; target 0 outside).
+  if (rj() && !childrenAtCorners(reshaped(old, pose, w, d, old.leg))) return;
   Touched t;
   t.tables.add(id);
   for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
@@ -1618,6 +1677,7 @@ void Sampler::tableLegSide(int32_t id, double beta) {
   if (!std::isfinite(p.logSizePrior(old.width, old.depth, leg))) return;
   // Symmetric Gaussian step on one parameter: log q(reverse) = log q(forward).
   [[maybe_unused]] const double log_q_ratio = 0.0;
+  if (rj() && !childrenAtCorners(reshaped(old, old.pose, old.width, old.depth, leg))) return;
   Touched t;
   t.tables.add(id);
   for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
@@ -1645,6 +1705,31 @@ void Sampler::legSide(int32_t id, double beta) {
   bb_.setLegSide(id, side);
   const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.setLegSide(id, old);
+}
+
+TableHyp Sampler::reshaped(const TableHyp& t, const Pose2& pose, double width, double depth,
+                          double leg) {
+  TableHyp r = t;
+  r.pose = pose;
+  r.width = width;
+  r.depth = depth;
+  r.leg = leg;
+  return r;
+}
+
+void Sampler::rjSizeStep(double beta) {
+  // One of the three symmetric size steps, on a table or a leg drawn uniformly (the sets' sizes
+  // do not change): each is its own reverse with the negated step, ratio 0 (decide() under
+  // kReversibleJump), refused outside the prior and the state space.
+  const uint32_t which = rng_.below(3);
+  if (which == 2) {
+    if (const int32_t id = randomLiveLeg(); id != kNone) legSide(id, beta);
+    return;
+  }
+  const int32_t id = randomLiveTable();
+  if (id == kNone) return;
+  if (which == 0) resizeTable(id, beta);
+  else tableLegSide(id, beta);
 }
 
 double Sampler::priorSpan(double leg_side, double other) {

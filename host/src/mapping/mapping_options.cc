@@ -29,10 +29,6 @@ Status MappingOptions::validate() const {
   for (const Status& s : checks) {
     if (!s) return s;
   }
-  if (sampler.acceptance == Acceptance::kReversibleJump && model.objects == ObjectModel::kRooms)
-    return Error{std::string("sampler.acceptance: rj has no size moves yet; model ") +
-                 objectModelName(model.objects) + " needs acceptance paper or literal " +
-                 "(or model paper or walls with rj)"};
   if (room) {
     const auto& [lo, hi] = *room;
     if (!(std::isfinite(lo.x()) && std::isfinite(lo.y()) && std::isfinite(hi.x()) &&

@@ -62,6 +62,9 @@ struct ReversibleMoves {
   // neighbours, or death of any wall; and a wall's symmetric pose steps (jitterWall, extendWall).
   double wall_birth_death = 1.0;
   double wall_jitter = 1.0;
+  // The rooms model's sizes (ModelParams::sized() only; 0 otherwise): a symmetric step on a
+  // table's width and depth (one corner fixed), on its leg side, or on a leg's side (rjSizeStep).
+  double sizes = 1.0;
 };
 
 struct SamplerOptions {
@@ -234,30 +237,47 @@ class Sampler {
   int orphansInBox(const Box& b, int k, int32_t* kth) const;
   // A leg pose uniform in box b (the leg births' Q(pa(S)); density 1 / b.volume).
   Pose2 drawInBox(const Box& b);
-  // A table at one of a leg's 8 corner placements (1/8) plus a Gaussian step (jitter_sigma_r,
-  // jitter_sigma_theta): the table births through a leg; density logTableBirthDensity.
-  Pose2 drawPlacement(const Pose2& leg);
+  // A table of `shape`'s size at one of a leg's 8 corner placements (1/8) plus a Gaussian step
+  // (jitter_sigma_r, jitter_sigma_theta): the table births through a leg; density
+  // logTableBirthDensity.
+  Pose2 drawPlacement(const Pose2& leg, const TableHyp& shape);
+  // A new table's size (width, depth, leg): the model's one size, or under the rooms model a
+  // draw from the size prior (uniform over its range; no random number is drawn otherwise).
+  TableHyp drawTableSize();
+  // A new leg's side: the model's one side, or uniform over the prior's range (rooms).
+  double drawLegSide();
+  // `shape` (its size) at `pose`; `t` with another pose and size.
+  static TableHyp shaped(const TableHyp& shape, const Pose2& pose);
+  static TableHyp reshaped(const TableHyp& t, const Pose2& pose, double width, double depth,
+                           double leg);
+  // Every child of `table` (its children as the blackboard holds them) within cornerLinkRadius
+  // of one of `table`'s corners: the reversible state space after a resize.
+  bool childrenAtCorners(const TableHyp& table) const;
+  // The rooms model's size kernel: resizeTable or tableLegSide on a random table, or legSide on
+  // a random leg, each symmetric.
+  void rjSizeStep(double beta);
   void rjLegBirthDeath(int slot, double beta);
   void rjJitterLeg(int32_t id, double beta);
   void rjParentChange(int32_t id, double beta);
   void rjLegTable(int32_t id, double beta);
   void rjJitterTable(int32_t id, double beta);
-  // log q(table | leg) of rjLegTable's birth: 8 placements, each with a Gaussian step.
-  double logTableBirthDensity(const Pose2& table, const Pose2& leg) const;
+  // log q(table | leg) of rjLegTable's birth: 8 placements of the table's size, each with a
+  // Gaussian step (the size's own draw is the reference measure's: it adds nothing).
+  double logTableBirthDensity(const TableHyp& table, const Pose2& leg) const;
   void rjTableBirthDeath(double beta);
   void rjTableGroup(double beta);
   // log q of rjTableGroup's birth of a table at `table` with legs at `legs[0..n)` (n <= 4):
   // summed over which leg came from a box (logLegBoxDensity; it must stand within
   // cornerLinkRadius of a corner) and over the assignments of the others to the corners but
   // that leg's nearest; -infinity if none can produce them.
-  double logGroupBirthDensity(const Pose2& table, const Pose2* legs, int n) const;
+  double logGroupBirthDensity(const TableHyp& table, const Pose2* legs, int n) const;
   // log of the density of a leg drawn uniformly in the box of a uniformly chosen slot of
   // rj_slots_ (summed over the boxes that hold it).
   double logLegBoxDensity(const Pose2& leg) const;
   // log of the density of a leg drawn at a table's corner: a Gaussian step (jitter_sigma_r,
   // jitter_sigma_theta) from the corner and the table's axes (theta modulo pi/2).
-  double logCornerLegDensity(const Pose2& table, int corner, const Pose2& leg) const;
-  int nearestCorner(const Pose2& table, const Vec2& at) const;
+  double logCornerLegDensity(const TableHyp& table, int corner, const Pose2& leg) const;
+  int nearestCorner(const TableHyp& table, const Vec2& at) const;
   // Walls under kReversibleJump (wall_moves.cc): the birth picks one of rj_fits_ uniformly and
   // draws each end around the fit's end: across the fit from a normal of prime_sigma_r, along it
   // from an even mixture of two normals, wall_end_sigma (extendWall's step) and 1 /
@@ -269,8 +289,8 @@ class Sampler {
   void rjWallBirthDeath(double beta);
   double logWallBirthDensity(const Vec2& a, const Vec2& b) const;
   int32_t randomLiveWall();
-  // `at` lies within cornerLinkRadius of a corner of a table at `table`.
-  bool nearCorner(const Pose2& table, const Vec2& at) const;
+  // `at` lies within cornerLinkRadius of a corner of `table` (its pose and size).
+  bool nearCorner(const TableHyp& table, const Vec2& at) const;
   // The orphan legs within cornerLinkRadius of a corner of a table at `pose`; false if more
   // than kMaxChildren.
   bool adoptable(const Pose2& pose, IdSet<4 * kMaxChildren>& out) const;
@@ -365,6 +385,7 @@ class Sampler {
 
   // ---- Walls (wall_moves.cc) ----
   bool walls() const { return bb_.params().walled(); }
+  bool rj() const { return opt_.acceptance == Acceptance::kReversibleJump; }
   // The segment a wall birth seeded at `slot` fits to the oriented shapelets collinear with it
   // (grown along the line, refitted by total least squares; shapelets only, no hypothesis and
   // no random draw): ends p0, p1, and whether the wall's free side (the seed's whisker's) is

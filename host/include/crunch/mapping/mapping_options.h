@@ -98,9 +98,8 @@ struct MappingOptions {
   // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
   // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256,
   // threads 0..256, pool_steps and marginal_steps 1..sampler.schedule_steps, marginal_keep in
-  // [0, 1), and the reversible-jump acceptance only with the paper's model: its move set
-  // (Sampler::sweepReversible) has no wall moves and no size moves yet, so under the walls or
-  // rooms model it would map neither walls nor sizes while the run said it did.
+  // [0, 1). Every acceptance runs with every object model (the reversible jump's walls and
+  // sizes: Sampler::sweepReversible).
   // okStatus(), or an Error naming the first bad field. runMapping and session::RobotSession
   // call it; a Mapper must be given valid options.
   Status validate() const;
