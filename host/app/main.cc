@@ -170,7 +170,7 @@ void addSharedOptions(CLI::App& app, SimOptions& opt) {
          },
          "move acceptance: paper (the annealed Gibbs conditional of eq. 29, no proposal "
          "ratio) | rj (reversible-jump Metropolis-Hastings with every move's proposal ratio, "
-         "with --model paper or walls; docs/BLACKBOARD.md)")
+         "any --model; docs/BLACKBOARD.md)")
       ->default_str("paper");
   app.add_option_function<int>(
          "--global-chains",

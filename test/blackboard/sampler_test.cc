@@ -202,7 +202,7 @@ TEST_CASE("Sampler: incremental and reference energies run the same chain", "[bl
 TEST_CASE("Sampler: reversible-jump options are validated, acceptance names round-trip",
           "[blackboard]") {
   SamplerOptions o;
-  o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0};  // every kernel, the sizes too
   REQUIRE_FALSE(o.validate());
   CHECK(o.validate().error().message.find("rj_moves") != std::string::npos);
   o = {};
