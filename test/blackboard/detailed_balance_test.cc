@@ -23,7 +23,9 @@
 // The rooms model's test (tables of any size) was checked the same way: a drift of 3 mm in
 // resizeTable's width step fails both its statistics (P(table) 0.998 vs 0.986, P(width above the
 // prior's middle) 0.94 vs 0.32); log q(T | L) dropped from the parent table's death fails
-// P(table) at 25 standard errors (0.9948 vs 0.9861). Not caught there: the same term dropped from
+// P(table) at 25 standard errors (0.9948 vs 0.9861); the table's leg side's density about the
+// leg's (logSideNearDensity) taken against Lebesgue instead of the prior's uniform probability
+// (0.807 vs 0.986). Not caught there: the same term dropped from
 // the birth alone (every birth of that small model is accepted either way), and a size drawn
 // from another density than the prior's (the shorter side uniform: P(wide) 0.315 vs 0.322).
 //

@@ -1088,7 +1088,7 @@ Pose2 Sampler::drawInBox(const Box& b) {
   return {c.x(), c.y(), wrapPeriod(th, kPi / 2)};
 }
 
-TableHyp Sampler::drawTableSize() {
+TableHyp Sampler::drawTableSize(double leg_side) {
   const ModelParams& p = bb_.params();
   TableHyp t;
   t.width = p.table_width;
@@ -1105,13 +1105,26 @@ TableHyp Sampler::drawTableSize() {
   const bool wide = rng_.uniform() < 0.5;
   t.width = wide ? hi : lo;
   t.depth = wide ? lo : hi;
-  t.leg = drawLegSide();
+  t.leg = drawSideNear(leg_side);
   return t;
 }
 
 double Sampler::drawLegSide() {
   const ModelParams& p = bb_.params();
   return p.sized() ? rng_.uniform(p.leg_min, p.leg_max) : p.leg_side;
+}
+
+double Sampler::drawSideNear(double side) {
+  const ModelParams& p = bb_.params();
+  return p.sized() ? side + rng_.normal(0, p.sigma_w) : p.leg_side;
+}
+
+double Sampler::logSideNearDensity(double side, double near) const {
+  const ModelParams& p = bb_.params();
+  if (!p.sized()) return 0.0;
+  const double z = (side - near) / p.sigma_w;
+  // The normal's density against the prior's uniform probability on [leg_min, leg_max].
+  return -0.5 * z * z - std::log(std::sqrt(2 * kPi) * p.sigma_w) + std::log(p.leg_max - p.leg_min);
 }
 
 Pose2 Sampler::drawPlacement(const Pose2& leg, const TableHyp& shape) {
@@ -1267,10 +1280,11 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
     // Birth of a parent table: its size from the prior (the rooms model), placement k uniform
     // of 8, then a Gaussian step. The size's reference measure is the prior itself, so drawing
     // from it adds nothing to the ratio (sampler.cc's top).
-    const TableHyp shape = drawTableSize();
+    const TableHyp shape = drawTableSize(l.side);
+    if (!std::isfinite(bb_.params().logSizePrior(shape.width, shape.depth, shape.leg))) return;
     const TableHyp born = shaped(shape, drawPlacement(l.pose, shape));
     if (!nearCorner(born, l.pose.position())) return;
-    const double log_q = logTableBirthDensity(born, l.pose);
+    const double log_q = logTableBirthDensity(born, l.pose) + logSideNearDensity(born.leg, l.side);
     Touched t;
     t.legs.add(leg);
     begin();
@@ -1291,7 +1305,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   if (tab.n_children != 1) return;  // not the sole child: nothing this kernel can do
   const int32_t table = l.parent;
   if (!nearCorner(tab, l.pose.position())) return;  // the birth could not have made it
-  const double log_q = logTableBirthDensity(tab, l.pose);
+  const double log_q = logTableBirthDensity(tab, l.pose) + logSideNearDensity(tab.leg, l.side);
   Touched t;
   t.legs.add(leg);
   t.tables.add(table);
@@ -1341,7 +1355,8 @@ double Sampler::logCornerLegDensity(const TableHyp& table, int corner, const Pos
          std::log(std::sqrt(2 * kPi) * st);
 }
 
-double Sampler::logGroupBirthDensity(const TableHyp& table, const Pose2* legs, int n) const {
+double Sampler::logGroupBirthDensity(const TableHyp& table, const Pose2* legs, const double* sides,
+                                     int n) const {
   const double neg_inf = -std::numeric_limits<double>::infinity();
   if (n < 1 || n > 4) return neg_inf;
   const double half = std::log(0.5);
@@ -1377,13 +1392,16 @@ double Sampler::logGroupBirthDensity(const TableHyp& table, const Pose2* legs, i
       for (int i = 0; i < 3; ++i) {
         const int leg = perm[static_cast<size_t>(i)];
         e += half;
-        if (leg < no)
-          e += logCornerLegDensity(table, corners[static_cast<size_t>(i)],
-                                   legs[others[static_cast<size_t>(leg)]]);
+        if (leg < no) {
+          const int o = others[static_cast<size_t>(leg)];
+          e += logCornerLegDensity(table, corners[static_cast<size_t>(i)], legs[o]) +
+               logSideNearDensity(sides[o], table.leg);
+        }
       }
       assign = logAddExp(assign, e);
     } while (std::next_permutation(perm.begin(), perm.end()));
-    total = logAddExp(total, head + logTableBirthDensity(table, legs[first]) + assign);
+    total = logAddExp(total, head + logTableBirthDensity(table, legs[first]) +
+                                 logSideNearDensity(table.leg, sides[first]) + assign);
   }
   return total;
 }
@@ -1400,8 +1418,10 @@ void Sampler::rjTableGroup(double beta) {
     std::array<double, 4> sides{};
     legs[0] = drawInBox(b);
     sides[0] = drawLegSide();
-    // The size from the prior (rooms model; its reference measure: the ratio gains nothing).
-    const TableHyp shape = drawTableSize();
+    // The width and depth from the prior (rooms model; their reference measure: the ratio gains
+    // nothing), the leg sides about the first leg's.
+    const TableHyp shape = drawTableSize(sides[0]);
+    if (!std::isfinite(bb_.params().logSizePrior(shape.width, shape.depth, shape.leg))) return;
     const TableHyp born = shaped(shape, drawPlacement(legs[0], shape));
     const Pose2& pose = born.pose;
     // As rjLegTable's birth: only tables with the leg at a corner (the target's known limit,
@@ -1416,10 +1436,11 @@ void Sampler::rjTableGroup(double beta) {
                       at.y() + rng_.normal(0, opt_.jitter_sigma_r),
                       wrapPeriod(pose.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi / 2)};
       if (!inSomeBox(leg)) return;  // outside the state space: target 0
-      sides[static_cast<size_t>(n)] = drawLegSide();
+      sides[static_cast<size_t>(n)] = drawSideNear(born.leg);
+      if (!bb_.params().legSideAllowed(sides[static_cast<size_t>(n)])) return;
       legs[static_cast<size_t>(n++)] = leg;
     }
-    const double log_q = logGroupBirthDensity(born, legs.data(), n);
+    const double log_q = logGroupBirthDensity(born, legs.data(), sides.data(), n);
     Touched t;
     for (int i = 0; i < n; ++i) bb_.shapeletsNear(legs[static_cast<size_t>(i)].position(), t.shapelets);
     if (t.shapelets.n >= static_cast<int>(std::size(t.shapelets.ids))) return;
@@ -1453,8 +1474,12 @@ void Sampler::rjTableGroup(double beta) {
   const int n = tab.n_children;
   if (n < 1 || n > 4) return;  // the birth makes one to four legs
   std::array<Pose2, 4> legs;
-  for (int i = 0; i < n; ++i) legs[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
-  const double log_q = logGroupBirthDensity(tab, legs.data(), n);
+  std::array<double, 4> sides{};
+  for (int i = 0; i < n; ++i) {
+    legs[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).pose;
+    sides[static_cast<size_t>(i)] = bb_.leg(tab.children[i]).side;
+  }
+  const double log_q = logGroupBirthDensity(tab, legs.data(), sides.data(), n);
   if (log_q == -std::numeric_limits<double>::infinity()) return;
   proposeDeathWithLegs(id, beta,
                        std::log(static_cast<double>(bb_.liveTables())) + log_q +

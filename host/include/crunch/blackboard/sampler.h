@@ -241,11 +241,18 @@ class Sampler {
   // (jitter_sigma_r, jitter_sigma_theta): the table births through a leg; density
   // logTableBirthDensity.
   Pose2 drawPlacement(const Pose2& leg, const TableHyp& shape);
-  // A new table's size (width, depth, leg): the model's one size, or under the rooms model a
-  // draw from the size prior (uniform over its range; no random number is drawn otherwise).
-  TableHyp drawTableSize();
+  // A new table's size (width, depth, leg): the model's one size, or under the rooms model
+  // width and depth from the size prior (uniform over its region) and the leg side about
+  // `leg_side` (drawSideNear; it may fall outside the prior: the caller refuses it). No random
+  // number is drawn under the other models.
+  TableHyp drawTableSize(double leg_side);
   // A new leg's side: the model's one side, or uniform over the prior's range (rooms).
   double drawLegSide();
+  // Rooms: a side drawn from a normal of sigma_w (eq. 10's leg-width spread) about `side`; and
+  // the log of that draw's density at `side` given `near`, against the prior's uniform
+  // probability (0 under the other models, which draw nothing).
+  double drawSideNear(double side);
+  double logSideNearDensity(double side, double near) const;
   // `shape` (its size) at `pose`; `t` with another pose and size.
   static TableHyp shaped(const TableHyp& shape, const Pose2& pose);
   static TableHyp reshaped(const TableHyp& t, const Pose2& pose, double width, double depth,
@@ -269,8 +276,11 @@ class Sampler {
   // log q of rjTableGroup's birth of a table at `table` with legs at `legs[0..n)` (n <= 4):
   // summed over which leg came from a box (logLegBoxDensity; it must stand within
   // cornerLinkRadius of a corner) and over the assignments of the others to the corners but
-  // that leg's nearest; -infinity if none can produce them.
-  double logGroupBirthDensity(const TableHyp& table, const Pose2* legs, int n) const;
+  // that leg's nearest; -infinity if none can produce them. Under the rooms model the legs'
+  // sides count too: the first's uniform (the reference measure's: 0), the table's leg side
+  // about it and the others' about the table's (logSideNearDensity).
+  double logGroupBirthDensity(const TableHyp& table, const Pose2* legs, const double* sides,
+                              int n) const;
   // log of the density of a leg drawn uniformly in the box of a uniformly chosen slot of
   // rj_slots_ (summed over the boxes that hold it).
   double logLegBoxDensity(const Pose2& leg) const;
