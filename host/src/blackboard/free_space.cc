@@ -81,7 +81,7 @@ void FreeSpaceGrid::addRay(const FreeRay& ray) {
     last_y = iy;
     if (value(0, ix, iy) == std::numeric_limits<uint16_t>::max()) continue;
     const uint16_t c = ++slot(0, ix, iy);
-    raise(ix, iy, c);
+    if (c <= window_cap_) raise(ix, iy, c);  // past the cap every window already holds it
   }
 }
 
@@ -103,10 +103,11 @@ void FreeSpaceGrid::addSweep(const Vec2& a, const Vec2& b, double radius, int pa
       const Vec2 c = lo_ + Vec2((ix + 0.5) * cell_, (iy + 0.5) * cell_);
       const double t = len2 > 0 ? std::clamp((c - a).dot(d) / len2, 0.0, 1.0) : 0.0;
       if ((c - (a + t * d)).squaredNorm() > r2) continue;
-      const int v = std::min<int>(std::numeric_limits<uint16_t>::max(), value(0, ix, iy) + passes);
-      if (v == value(0, ix, iy)) continue;
+      const int old = value(0, ix, iy);
+      const int v = std::min<int>(std::numeric_limits<uint16_t>::max(), old + passes);
+      if (v == old) continue;
       slot(0, ix, iy) = static_cast<uint16_t>(v);
-      raise(ix, iy, static_cast<uint16_t>(v));
+      if (old < window_cap_) raise(ix, iy, static_cast<uint16_t>(std::min<int>(v, window_cap_)));
     }
   }
 }
@@ -183,6 +184,10 @@ int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
     if (wy + s > y1) break;
   }
   return best;
+}
+
+void FreeSpaceGrid::setWindowCap(int cap) {
+  window_cap_ = static_cast<uint16_t>(std::clamp(cap, 0, static_cast<int>(std::numeric_limits<uint16_t>::max())));
 }
 
 void FreeSpaceGrid::setRoom(const Vec2& lo, const Vec2& hi) {

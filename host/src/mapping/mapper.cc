@@ -246,6 +246,8 @@ Mapper::Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,
   // Tables of different sizes at one spot are different objects (a chair and a table).
   options_.fuse.compare_sizes = options_.model.sized();
   if (options_.room) free_space_.setRoom(options_.room->first, options_.room->second);
+  // The blackboard reads at most free_pass_cap passes of any square (Blackboard::freeTerm).
+  free_space_.setWindowCap(options_.model.free_pass_cap);
 }
 
 void Mapper::addBodySweep(const Vec2& a, const Vec2& b) {

@@ -36,6 +36,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -64,6 +65,13 @@ class FreeSpaceGrid {
   // term reads both its sides, and a wall at the room's edge has nothing swept behind it).
   // Counted as one ray (the cached terms change).
   void setRoom(const Vec2& lo, const Vec2& hi);
+
+  // The readers need maxInSquare() only up to `cap` (the blackboard charges at most
+  // free_pass_cap passes): from here on the window planes hold each maximum clamped to `cap`,
+  // so a cell past it raises no window (the ray upkeep's cost, issue 15), and
+  // min(maxInSquare(), cap) is unchanged for every square. count() and countAt() stay exact.
+  // Before the first ray (windows raised earlier keep their values, which are never lower).
+  void setWindowCap(int cap);
 
   // Passes through the cell containing p.
   int count(const Vec2& p) const;
@@ -126,6 +134,7 @@ class FreeSpaceGrid {
   Vec2 lo_;
   double cell_;
   bool room_ = false;
+  uint16_t window_cap_ = std::numeric_limits<uint16_t>::max();
   Vec2 room_lo_{0, 0}, room_hi_{0, 0};
   int nx_ = 0, ny_ = 0;
   int tiles_x_ = 0;
