@@ -136,6 +136,58 @@ TEST_CASE("Blackboard: a wall joins the shapelets' noisy-OR and pays its prior a
   CHECK(bb.liveWalls() == 0);
 }
 
+TEST_CASE("Blackboard: a wall's negative evidence is its pieces' passes through both sides, capped",
+          "[blackboard]") {
+  // Restated from the contract (blackboard.h wallFreeTerm, docs/BLACKBOARD.md "Walls"): the wall
+  // in pieces one leg side long; a piece's passes are the most, over samples one cell apart
+  // along it, of the fewer of the counts free_margin (at least a cell) either side; each piece
+  // is charged min(passes, free_pass_cap) log p_miss. Rays cross the wall's line at random
+  // places, so pieces see 0 to several passes on one side, the other or both.
+  ModelParams p = rooms();
+  for (const int cap : {1, 2, 4}) {
+    for (const bool flipped : {false, true}) {
+      INFO("cap " << cap << (flipped ? ", wall b->a" : ", wall a->b"));
+      p.free_pass_cap = cap;
+      FreeSpaceGrid free({0, 0}, {2, 2}, 0.01);
+      Rng rays(41 + static_cast<uint64_t>(cap));
+      for (int i = 0; i < 60; ++i) {
+        const double x = rays.uniform(0.4, 1.6), y0 = rays.uniform(0.85, 0.99);
+        const double y1 = rays.uniform(1.01, 1.15);
+        const bool across = rays.uniform() < 0.6;  // else stops short of the line on one side
+        free.addRay({{x, y0}, {x + rays.uniform(-0.05, 0.05), across ? y1 : 0.99}});
+      }
+      Blackboard bb(p, 4, 16);
+      bb.setFreeSpace(&free);
+      const Vec2 a{0.5, 1.0}, b{1.5, 1.0};
+      const Vec2 wa = flipped ? b : a, wb = flipped ? a : b;
+      const double m = std::max(p.free_margin, free.cell());
+      const int pieces = static_cast<int>(std::ceil(1.0 / p.leg_side - 1e-9));
+      const int steps = static_cast<int>(std::ceil((1.0 / pieces) / free.cell() - 1e-9));
+      const Vec2 dir = (wb - wa).normalized(), nrm{-dir.y(), dir.x()};
+      double expect = 0;
+      int charged = 0;
+      for (int i = 0; i < pieces; ++i) {
+        int most = 0;
+        for (int k = 0; k < steps; ++k) {
+          const Vec2 q = wa + dir * ((1.0 / pieces) * (i + (k + 0.5) / steps));
+          most = std::max(most, std::min(free.count(q + m * nrm), free.count(q - m * nrm)));
+        }
+        expect += std::min(most, cap) * std::log(p.p_miss);
+        charged += most > 0;
+      }
+      // The same wall far from every ray: no negative evidence; the difference is the term.
+      const double e0 = bb.totalEnergy();
+      const int32_t id = bb.addWall(wa, wb);
+      const double on_rays = bb.totalEnergy() - e0;
+      bb.killWall(id);
+      bb.addWall(wa + Vec2{0, 0.6}, wb + Vec2{0, 0.6});
+      const double clear = bb.totalEnergy() - e0;
+      CHECK(charged > pieces / 4);  // the rays crossed a good part of the wall
+      CHECK(on_rays - clear == Approx(expect).margin(1e-9));
+    }
+  }
+}
+
 TEST_CASE("Sampler: every wall move's local energy change equals the brute-force change",
           "[blackboard]") {
   // Both acceptances: the paper's wall moves (birth, death, jitter, extend, merge, split) and

@@ -382,13 +382,19 @@ double Blackboard::wallFreeTerm(const Vec2& a, const Vec2& b) const {
   const int steps = std::max(1, static_cast<int>(std::ceil(piece / free_->cell())));
   double e = 0.0;
   const double log_miss = logs_.p_miss;
+  const int cap = p_.free_pass_cap;
   for (int i = 0; i < pieces; ++i) {
     int best = 0;
-    for (int k = 0; k < steps; ++k) {
+    // The piece's term reads min(best, cap): stop once it reaches the cap. Each sample reads
+    // the solid side first (right of a->b, -nrm: behind a real wall no ray passed, so mostly
+    // 0), and the free side only when the solid side could raise best.
+    for (int k = 0; k < steps && best < cap; ++k) {
       const Vec2 q = a + dir * (piece * (i + (k + 0.5) / steps));
-      best = std::max(best, std::min(free_->count(q + m * nrm), free_->count(q - m * nrm)));
+      const int behind = free_->count(q - m * nrm);
+      if (behind <= best) continue;
+      best = std::max(best, std::min(free_->count(q + m * nrm), behind));
     }
-    e += std::min(best, p_.free_pass_cap) * log_miss;
+    e += std::min(best, cap) * log_miss;
   }
   return e;
 }
