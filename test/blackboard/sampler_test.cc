@@ -94,6 +94,38 @@ TEST_CASE("Blackboard: energy audit holds with negative evidence attached", "[bl
   CHECK(sampler.stats().audit_cache_max_error < 1e-9);  // every cached term is its fresh value
 }
 
+TEST_CASE("Sampler: under reversible jump a table of the model's one size is born whatever the "
+          "rooms model's size prior says",
+          "[blackboard]") {
+  // The paper's model with a 2.4 x 1.2 m table (beyond the rooms model's prior of at most
+  // 2.0 x 1.0 m, which does not apply to it) and 10 cm legs (beyond its leg range): the births
+  // through a leg and the whole-table births must still make tables of that size.
+  ModelParams p;
+  p.table_width = 2.4;
+  p.table_depth = 1.2;
+  p.leg_side = 0.1;
+  Blackboard bb(p, 16, 256);
+  for (const auto& s : TableShapelets({1.5, 1.5, 0.2}, p, {0, 1, 2, 3})) bb.pushShapelet(s);
+  Rng rng(3);
+  SamplerOptions opt;
+  opt.acceptance = Acceptance::kReversibleJump;
+  opt.rj_moves.table_birth_death = 0.0;  // only the births that draw a size
+  Sampler sampler(bb, opt, rng);
+  int max_tables = 0;
+  for (double beta : {0.3, 1.0, 5.0}) {
+    for (int i = 0; i < 20; ++i) {
+      sampler.sweep(beta);
+      max_tables = std::max(max_tables, bb.liveTables());
+    }
+  }
+  CHECK(max_tables > 0);
+  for (int32_t id = 0; id < bb.tableExtent(); ++id) {
+    if (!bb.table(id).alive) continue;
+    CHECK(bb.table(id).width == p.table_width);
+    CHECK(bb.table(id).leg == p.leg_side);
+  }
+}
+
 TEST_CASE("Sampler: every reversible-jump move's local energy change equals the brute force",
           "[blackboard]") {
   // The same two partly touched tables and negative evidence as above, under

@@ -187,7 +187,8 @@ int FreeSpaceGrid::boxMax(int x0, int y0, int x1, int y1) const {
 }
 
 void FreeSpaceGrid::setWindowCap(int cap) {
-  window_cap_ = static_cast<uint16_t>(std::clamp(cap, 0, static_cast<int>(std::numeric_limits<uint16_t>::max())));
+  const int most = std::numeric_limits<uint16_t>::max();
+  window_cap_ = static_cast<uint16_t>(std::clamp(cap, 0, most));
 }
 
 void FreeSpaceGrid::setRoom(const Vec2& lo, const Vec2& hi) {

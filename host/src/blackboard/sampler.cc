@@ -1268,6 +1268,12 @@ bool Sampler::childrenAtCorners(const TableHyp& table) const {
   return true;
 }
 
+bool Sampler::sizeAllowed(const TableHyp& shape) const {
+  // The paper's and the walls model's one size is not judged by the rooms model's prior.
+  const ModelParams& p = bb_.params();
+  return !p.sized() || std::isfinite(p.logSizePrior(shape.width, shape.depth, shape.leg));
+}
+
 TableHyp Sampler::shaped(const TableHyp& shape, const Pose2& pose) {
   TableHyp t = shape;
   t.pose = pose;
@@ -1281,7 +1287,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
     // of 8, then a Gaussian step. The size's reference measure is the prior itself, so drawing
     // from it adds nothing to the ratio (sampler.cc's top).
     const TableHyp shape = drawTableSize(l.side);
-    if (!std::isfinite(bb_.params().logSizePrior(shape.width, shape.depth, shape.leg))) return;
+    if (!sizeAllowed(shape)) return;
     const TableHyp born = shaped(shape, drawPlacement(l.pose, shape));
     if (!nearCorner(born, l.pose.position())) return;
     const double log_q = logTableBirthDensity(born, l.pose) + logSideNearDensity(born.leg, l.side);
@@ -1421,7 +1427,7 @@ void Sampler::rjTableGroup(double beta) {
     // The width and depth from the prior (rooms model; their reference measure: the ratio gains
     // nothing), the leg sides about the first leg's.
     const TableHyp shape = drawTableSize(sides[0]);
-    if (!std::isfinite(bb_.params().logSizePrior(shape.width, shape.depth, shape.leg))) return;
+    if (!sizeAllowed(shape)) return;
     const TableHyp born = shaped(shape, drawPlacement(legs[0], shape));
     const Pose2& pose = born.pose;
     // As rjLegTable's birth: only tables with the leg at a corner (the target's known limit,
@@ -1437,7 +1443,8 @@ void Sampler::rjTableGroup(double beta) {
                       wrapPeriod(pose.theta + rng_.normal(0, opt_.jitter_sigma_theta), kPi / 2)};
       if (!inSomeBox(leg)) return;  // outside the state space: target 0
       sides[static_cast<size_t>(n)] = drawSideNear(born.leg);
-      if (!bb_.params().legSideAllowed(sides[static_cast<size_t>(n)])) return;
+      if (bb_.params().sized() && !bb_.params().legSideAllowed(sides[static_cast<size_t>(n)]))
+        return;
       legs[static_cast<size_t>(n++)] = leg;
     }
     const double log_q = logGroupBirthDensity(born, legs.data(), sides.data(), n);

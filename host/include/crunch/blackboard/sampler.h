@@ -253,6 +253,8 @@ class Sampler {
   // probability (0 under the other models, which draw nothing).
   double drawSideNear(double side);
   double logSideNearDensity(double side, double near) const;
+  // A drawn size inside the rooms model's prior (always true under the other models).
+  bool sizeAllowed(const TableHyp& shape) const;
   // `shape` (its size) at `pose`; `t` with another pose and size.
   static TableHyp shaped(const TableHyp& shape, const Pose2& pose);
   static TableHyp reshaped(const TableHyp& t, const Pose2& pose, double width, double depth,
