@@ -1275,9 +1275,14 @@ bool Sampler::sizeAllowed(const TableHyp& shape) const {
 }
 
 TableHyp Sampler::shaped(const TableHyp& shape, const Pose2& pose) {
-  TableHyp t = shape;
-  t.pose = pose;
-  return t;
+  return reshaped(shape, pose, shape.width, shape.depth, shape.leg);
+}
+
+bool Sampler::drawTableThrough(const Pose2& leg, double side, TableHyp& born) {
+  const TableHyp shape = drawTableSize(side);
+  if (!sizeAllowed(shape)) return false;
+  born = shaped(shape, drawPlacement(leg, shape));
+  return nearCorner(born, leg.position());
 }
 
 void Sampler::rjLegTable(int32_t leg, double beta) {
@@ -1286,10 +1291,8 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
     // Birth of a parent table: its size from the prior (the rooms model), placement k uniform
     // of 8, then a Gaussian step. The size's reference measure is the prior itself, so drawing
     // from it adds nothing to the ratio (sampler.cc's top).
-    const TableHyp shape = drawTableSize(l.side);
-    if (!sizeAllowed(shape)) return;
-    const TableHyp born = shaped(shape, drawPlacement(l.pose, shape));
-    if (!nearCorner(born, l.pose.position())) return;
+    TableHyp born;
+    if (!drawTableThrough(l.pose, l.side, born)) return;
     const double log_q = logTableBirthDensity(born, l.pose) + logSideNearDensity(born.leg, l.side);
     Touched t;
     t.legs.add(leg);
@@ -1426,13 +1429,11 @@ void Sampler::rjTableGroup(double beta) {
     sides[0] = drawLegSide();
     // The width and depth from the prior (rooms model; their reference measure: the ratio gains
     // nothing), the leg sides about the first leg's.
-    const TableHyp shape = drawTableSize(sides[0]);
-    if (!sizeAllowed(shape)) return;
-    const TableHyp born = shaped(shape, drawPlacement(legs[0], shape));
-    const Pose2& pose = born.pose;
     // As rjLegTable's birth: only tables with the leg at a corner (the target's known limit,
     // docs/BLACKBOARD.md); the density below has the same indicator.
-    if (!nearCorner(born, legs[0].position())) return;
+    TableHyp born;
+    if (!drawTableThrough(legs[0], sides[0], born)) return;
+    const Pose2& pose = born.pose;
     const int c1 = nearestCorner(born, legs[0].position());
     int n = 1;
     for (int c = 0; c < 4; ++c) {

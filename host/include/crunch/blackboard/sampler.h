@@ -255,6 +255,10 @@ class Sampler {
   double logSideNearDensity(double side, double near) const;
   // A drawn size inside the rooms model's prior (always true under the other models).
   bool sizeAllowed(const TableHyp& shape) const;
+  // A table born through a leg at `leg` of side `side` (rjLegTable's and rjTableGroup's
+  // births): its size (drawTableSize), then one of the leg's placements (drawPlacement). False
+  // when the size is outside the prior or the leg is off every corner (outside the state space).
+  bool drawTableThrough(const Pose2& leg, double side, TableHyp& born);
   // `shape` (its size) at `pose`; `t` with another pose and size.
   static TableHyp shaped(const TableHyp& shape, const Pose2& pose);
   static TableHyp reshaped(const TableHyp& t, const Pose2& pose, double width, double depth,
