@@ -83,8 +83,7 @@ Sampler::Sampler(Blackboard& board, const SamplerOptions& options, Rng& rng)
   order_.reserve(4096);
   rj_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
   if (walls()) {
-    if (opt_.acceptance == Acceptance::kReversibleJump)
-      rj_fits_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
+    if (rj()) rj_fits_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
     wall_slots_.reserve(static_cast<size_t>(bb_.workingMemoryCapacity()));
     fit_memo_.resize(static_cast<size_t>(bb_.workingMemoryCapacity()));
   }
@@ -97,15 +96,14 @@ void Sampler::anneal() {
 
 void Sampler::annealSweep(int k) {
   assert(k >= 0 && k < annealSweeps());
-  const bool rj = opt_.acceptance == Acceptance::kReversibleJump;
-  if (k == 0 && rj) enterReversibleSpace();
+  if (k == 0 && rj()) enterReversibleSpace();
   const int step = k / opt_.sweeps_per_temperature;
   const int s = k % opt_.sweeps_per_temperature;
   const double beta = betas_[static_cast<std::size_t>(step)];
   sweep(beta);
   if (opt_.after_sweep) opt_.after_sweep(step, s, beta, bb_);
   if (s + 1 == opt_.sweeps_per_temperature) {
-    if (opt_.prune && !rj) prune();
+    if (opt_.prune && !rj()) prune();
     if (opt_.after_temperature) opt_.after_temperature(step, beta, bb_);
   }
 }
@@ -154,7 +152,7 @@ void adoptAt(const Blackboard& bb, const Vec2& corner, Local&& local, double r, 
 
 void Sampler::sweep(double beta) {
   const SweepScope scope(bb_);
-  if (opt_.acceptance == Acceptance::kReversibleJump) {
+  if (rj()) {
     sweepReversible(beta);
     return;
   }
@@ -222,7 +220,7 @@ void Sampler::begin() {
 bool Sampler::decide(double delta, double beta) {
   // Under kReversibleJump the sweep calls decide() only from symmetric proposals (jitterWall,
   // extendWall): Metropolis-Hastings with a log q ratio of 0.
-  if (opt_.acceptance == Acceptance::kReversibleJump) return decideRj(delta, beta, 0.0);
+  if (rj()) return decideRj(delta, beta, 0.0);
   if (audit_) {
     const double err = std::abs((bb_.totalEnergy() - audit_before_) - delta);
     stats_.audit_max_error = std::max(stats_.audit_max_error, err);
@@ -573,9 +571,7 @@ void Sampler::proposeDeathWithLegs(int32_t id, double beta, double log_q_ratio) 
   for (int i = 0; i < n; ++i) bb_.killLeg(kids[static_cast<size_t>(i)]);
   bb_.killTable(id);
   const double e1 = bb_.energyAfter(t);
-  const bool ok = opt_.acceptance == Acceptance::kReversibleJump
-                      ? decideRj(e1 - e0, beta, log_q_ratio)
-                      : decide(e1 - e0, beta);
+  const bool ok = rj() ? decideRj(e1 - e0, beta, log_q_ratio) : decide(e1 - e0, beta);
   if (ok) {
     bb_.releaseTable(id);
     for (int i = 0; i < n; ++i) bb_.releaseLeg(kids[static_cast<size_t>(i)]);
@@ -1232,7 +1228,8 @@ void Sampler::rjParentChange(int32_t leg, double beta) {
   if (!decideRj(e1 - e0, beta, log_rev - log_fwd)) bb_.setParent(leg, old_parent);
 }
 
-double Sampler::logTableBirthDensity(const TableHyp& shape, const Pose2& leg) const {
+double Sampler::logTableBirthDensity(const TableHyp& shape, const Pose2& leg,
+                                     double leg_side) const {
   const Pose2& table = shape.pose;
   const double sr = opt_.jitter_sigma_r, st = opt_.jitter_sigma_theta;
   double acc = -std::numeric_limits<double>::infinity();
@@ -1252,7 +1249,7 @@ double Sampler::logTableBirthDensity(const TableHyp& shape, const Pose2& leg) co
                       wrap - std::log(std::sqrt(2 * kPi) * st);
     acc = logAddExp(acc, std::log(1.0 / 8.0) + lg);
   }
-  return acc;
+  return acc + logSideNearDensity(shape.leg, leg_side);
 }
 
 bool Sampler::nearCorner(const TableHyp& table, const Vec2& at) const {
@@ -1293,7 +1290,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
     // from it adds nothing to the ratio (sampler.cc's top).
     TableHyp born;
     if (!drawTableThrough(l.pose, l.side, born)) return;
-    const double log_q = logTableBirthDensity(born, l.pose) + logSideNearDensity(born.leg, l.side);
+    const double log_q = logTableBirthDensity(born, l.pose, l.side);
     Touched t;
     t.legs.add(leg);
     begin();
@@ -1314,7 +1311,7 @@ void Sampler::rjLegTable(int32_t leg, double beta) {
   if (tab.n_children != 1) return;  // not the sole child: nothing this kernel can do
   const int32_t table = l.parent;
   if (!nearCorner(tab, l.pose.position())) return;  // the birth could not have made it
-  const double log_q = logTableBirthDensity(tab, l.pose) + logSideNearDensity(tab.leg, l.side);
+  const double log_q = logTableBirthDensity(tab, l.pose, l.side);
   Touched t;
   t.legs.add(leg);
   t.tables.add(table);
@@ -1409,8 +1406,8 @@ double Sampler::logGroupBirthDensity(const TableHyp& table, const Pose2* legs, c
       }
       assign = logAddExp(assign, e);
     } while (std::next_permutation(perm.begin(), perm.end()));
-    total = logAddExp(total, head + logTableBirthDensity(table, legs[first]) +
-                                 logSideNearDensity(table.leg, sides[first]) + assign);
+    total = logAddExp(total,
+                      head + logTableBirthDensity(table, legs[first], sides[first]) + assign);
   }
   return total;
 }

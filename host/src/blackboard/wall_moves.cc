@@ -259,9 +259,7 @@ void Sampler::proposeWallDeath(int32_t id, double beta, double log_q_ratio) {
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.killWall(id);
   const double e1 = bb_.energyAfter(t, wall_slots_);
-  const bool ok = opt_.acceptance == Acceptance::kReversibleJump
-                      ? decideRj(e1 - e0, beta, log_q_ratio)
-                      : decide(e1 - e0, beta);
+  const bool ok = rj() ? decideRj(e1 - e0, beta, log_q_ratio) : decide(e1 - e0, beta);
   if (ok) bb_.releaseWall(id);
   else bb_.reviveWall(id);
 }
@@ -287,7 +285,7 @@ void Sampler::jitterWall(int32_t id, double beta) {
 
 void Sampler::moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta) {
   // The reversible-jump state space has no two walls sharing space (sharesSpace).
-  if (opt_.acceptance == Acceptance::kReversibleJump && sharesSpace(a, b, id)) return;
+  if (rj() && sharesSpace(a, b, id)) return;
   const WallHyp w = bb_.wall(id);
   wall_slots_.clear();
   bb_.beginCollect();

@@ -218,6 +218,8 @@ class Sampler {
   // Reversible jump: accept with min(1, exp(beta * delta + log_q_ratio)), log_q_ratio =
   // log q(reverse) - log q(forward) including Jacobians.
   bool decideRj(double delta, double beta, double log_q_ratio);
+  // The sampler runs Acceptance::kReversibleJump.
+  bool rj() const { return opt_.acceptance == Acceptance::kReversibleJump; }
   // ---- Reversible-jump moves (Acceptance::kReversibleJump) ----
   void sweepReversible(double beta);
   // The birth box of slot s: frame and extents; false if no leg can cause the shapelet.
@@ -274,9 +276,11 @@ class Sampler {
   void rjParentChange(int32_t id, double beta);
   void rjLegTable(int32_t id, double beta);
   void rjJitterTable(int32_t id, double beta);
-  // log q(table | leg) of rjLegTable's birth: 8 placements of the table's size, each with a
-  // Gaussian step (the size's own draw is the reference measure's: it adds nothing).
-  double logTableBirthDensity(const TableHyp& table, const Pose2& leg) const;
+  // log q(table | leg) of the births through a leg (drawTableThrough) for a leg of side
+  // `leg_side`: 8 placements of the table's size, each with a Gaussian step, and (rooms) the
+  // table's leg side about the leg's (logSideNearDensity). Width and depth are drawn from the
+  // reference measure itself: they add nothing.
+  double logTableBirthDensity(const TableHyp& table, const Pose2& leg, double leg_side) const;
   void rjTableBirthDeath(double beta);
   void rjTableGroup(double beta);
   // log q of rjTableGroup's birth of a table at `table` with legs at `legs[0..n)` (n <= 4):
@@ -284,7 +288,7 @@ class Sampler {
   // cornerLinkRadius of a corner) and over the assignments of the others to the corners but
   // that leg's nearest; -infinity if none can produce them. Under the rooms model the legs'
   // sides count too: the first's uniform (the reference measure's: 0), the table's leg side
-  // about it and the others' about the table's (logSideNearDensity).
+  // about it (in logTableBirthDensity) and the others' about the table's (logSideNearDensity).
   double logGroupBirthDensity(const TableHyp& table, const Pose2* legs, const double* sides,
                               int n) const;
   // log of the density of a leg drawn uniformly in the box of a uniformly chosen slot of
@@ -401,7 +405,6 @@ class Sampler {
 
   // ---- Walls (wall_moves.cc) ----
   bool walls() const { return bb_.params().walled(); }
-  bool rj() const { return opt_.acceptance == Acceptance::kReversibleJump; }
   // The segment a wall birth seeded at `slot` fits to the oriented shapelets collinear with it
   // (grown along the line, refitted by total least squares; shapelets only, no hypothesis and
   // no random draw): ends p0, p1, and whether the wall's free side (the seed's whisker's) is
