@@ -46,6 +46,55 @@ TEST_CASE("Factors: Delta_LS (eq. 12) uses perimeter distance and the touched si
   CHECK(deltaLS(leg, s, p) == Approx(0.0).margin(kTight));
 }
 
+TEST_CASE("Factors: near a corner Delta_LS compares a shapelet with the face its line fits "
+          "(walls and rooms models)", "[blackboard]") {
+  ModelParams p;
+  LegHyp leg;
+  leg.pose = {0, 0, 0};
+  leg.side = 0.05;
+  Shapelet s;
+  // Inside the corner (0.025, -0.025): 1 mm from the -y face, 3 mm from the +x face, and
+  // oriented along y, as a contact on the +x face is.
+  s.x = 0.022;
+  s.y = -0.024;
+  s.phi = kPi / 2;
+  const double on_x_face = 0.3 * 0.3;  // 3 mm is 0.3 sigma; the angle fits exactly
+  const double on_y_face = 0.1 * 0.1 + 16.0 * 16.0;  // 1 mm, but a quarter turn off (pi/2 / (pi/32))
+  // The paper model compares the angle with the nearest face's.
+  p.objects = ObjectModel::kPaper;
+  CHECK(deltaLS(leg, s, p) == Approx(on_y_face).epsilon(1e-9));
+  for (ObjectModel m : {ObjectModel::kWalls, ObjectModel::kRooms}) {
+    p.objects = m;
+    CHECK(deltaLS(leg, s, p) == Approx(on_x_face).epsilon(1e-9));
+    // Along x the -y face fits: 1 mm.
+    s.phi = 0.0;
+    CHECK(deltaLS(leg, s, p) == Approx(0.1 * 0.1).epsilon(1e-9));
+    s.phi = kPi / 2;
+    // The distance to a face is to its segment: beyond the corner, both legs of the L count.
+    Shapelet out = s;
+    out.x = 0.028;   // 3 mm past the +x face ...
+    out.y = -0.029;  // ... and 4 mm past the corner along it: 5 mm to the face's segment
+    CHECK(deltaLS(leg, out, p) == Approx(0.5 * 0.5).epsilon(1e-9));
+    // A turned leg: the same shapelet in the leg's frame gives the same Delta.
+    LegHyp turned = leg;
+    turned.pose = {1.0, 2.0, 0.7};
+    Shapelet t = s;
+    const Vec2 w = turned.pose.toWorld(Vec2{s.x, s.y});
+    t.x = w.x();
+    t.y = w.y();
+    t.phi = s.phi + 0.7;
+    CHECK(deltaLS(turned, t, p) == Approx(on_x_face).epsilon(1e-9));
+    // On a face's middle both readings agree; an unoriented shapelet has no face to choose.
+    Shapelet mid;
+    mid.x = 0.030;
+    mid.phi = kPi / 2 + kPi / 32;
+    CHECK(deltaLS(leg, mid, p) == Approx(1.25).epsilon(1e-12));
+    Shapelet point = s;
+    point.oriented = false;
+    CHECK(deltaLS(leg, point, p) == Approx(0.1 * 0.1).epsilon(1e-9));
+  }
+}
+
 TEST_CASE("Factors: leg and shapelet densities mix parent and null prior (eqs. 9, 13, 17)",
           "[blackboard]") {
   const ModelParams p;

@@ -59,6 +59,21 @@ double deltaTLHeld(const TableHyp& table, const LegHyp& leg, const ModelParams& 
 namespace {
 double deltaLSAt(const LegHyp& leg, double c, double sn, const Shapelet& s,
                  const ModelParams& p) {
+  if (p.perFaceKernel() && s.oriented) {  // the face the shapelet's line fits
+    const Vec2 q = leg.pose.toLocal({s.x, s.y}, c, sn);
+    const double h = 0.5 * leg.side;
+    const double ox = std::max(std::abs(q.x()) - h, 0.0), oy = std::max(std::abs(q.y()) - h, 0.0);
+    // faces x = +-h run along the leg's y axis, faces y = +-h along its x axis
+    const double dx = std::min(std::abs(q.x() - h), std::abs(q.x() + h));
+    const double dy = std::min(std::abs(q.y() - h), std::abs(q.y() + h));
+    const double along_y = (dx * dx + oy * oy) / (p.sigma_r_shapelet * p.sigma_r_shapelet);
+    const double along_x = (dy * dy + ox * ox) / (p.sigma_r_shapelet * p.sigma_r_shapelet);
+    // angle to the x faces' line modulo pi, in [-pi/2, pi/2); the y faces' is a quarter turn off
+    const double to_x = std::abs(wrapPeriod(leg.pose.theta - s.phi, kPi));
+    const double ax = to_x / p.sigma_theta_shapelet;
+    const double ay = (0.5 * kPi - to_x) / p.sigma_theta_shapelet;
+    return std::min(along_y + ay * ay, along_x + ax * ax);
+  }
   const OrientedRect outline{leg.pose, leg.side, leg.side};
   const PerimeterPoint pp = closestOnPerimeter(outline, {s.x, s.y}, c, sn);
   // Side m's surface runs along the leg's y axis for faces 0 and 2, along x for faces 1 and 3:

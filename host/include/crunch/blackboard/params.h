@@ -112,6 +112,12 @@ struct ModelParams {
   Status validate() const;
 
   bool sized() const { return objects == ObjectModel::kRooms; }
+  // Eq. 12 per face (kWalls, kRooms): Delta_LS of an oriented shapelet is the least over the
+  // leg's four faces of (distance to the face's segment / sigma_r_shapelet)^2 + (angle to the
+  // face / sigma_theta_shapelet)^2, so a contact near a corner is compared with the face its
+  // line fits, not with whichever face is a millimetre nearer. kPaper keeps the reading of its
+  // figures: the angle of the nearest face (docs/BLACKBOARD.md "Which face a contact is on").
+  bool perFaceKernel() const { return objects != ObjectModel::kPaper; }
   // Walls are hypotheses (kWalls, kRooms).
   bool walled() const { return objects != ObjectModel::kPaper; }
   // Offset of corner i's leg centre in the frame of a `width` x `depth` table with `leg` legs
