@@ -59,7 +59,8 @@ TEST_CASE("Factors: near a corner Delta_LS compares a shapelet with the face its
   s.y = -0.024;
   s.phi = kPi / 2;
   const double on_x_face = 0.3 * 0.3;  // 3 mm is 0.3 sigma; the angle fits exactly
-  const double on_y_face = 0.1 * 0.1 + 16.0 * 16.0;  // 1 mm, but a quarter turn off (pi/2 / (pi/32))
+  // 1 mm, but a quarter turn off: (pi/2) / (pi/32) = 16 sigma
+  const double on_y_face = 0.1 * 0.1 + 16.0 * 16.0;
   // The paper model compares the angle with the nearest face's.
   p.objects = ObjectModel::kPaper;
   CHECK(deltaLS(leg, s, p) == Approx(on_y_face).epsilon(1e-9));

@@ -62,12 +62,14 @@ double deltaLSAt(const LegHyp& leg, double c, double sn, const Shapelet& s,
   if (p.perFaceKernel() && s.oriented) {  // the face the shapelet's line fits
     const Vec2 q = leg.pose.toLocal({s.x, s.y}, c, sn);
     const double h = 0.5 * leg.side;
-    const double ox = std::max(std::abs(q.x()) - h, 0.0), oy = std::max(std::abs(q.y()) - h, 0.0);
+    // how far past the corners along x and y (0 within the leg's extent)
+    const double past_x = std::max(std::abs(q.x()) - h, 0.0);
+    const double past_y = std::max(std::abs(q.y()) - h, 0.0);
     // faces x = +-h run along the leg's y axis, faces y = +-h along its x axis
     const double dx = std::min(std::abs(q.x() - h), std::abs(q.x() + h));
     const double dy = std::min(std::abs(q.y() - h), std::abs(q.y() + h));
-    const double along_y = (dx * dx + oy * oy) / (p.sigma_r_shapelet * p.sigma_r_shapelet);
-    const double along_x = (dy * dy + ox * ox) / (p.sigma_r_shapelet * p.sigma_r_shapelet);
+    const double along_y = (dx * dx + past_y * past_y) / (p.sigma_r_shapelet * p.sigma_r_shapelet);
+    const double along_x = (dy * dy + past_x * past_x) / (p.sigma_r_shapelet * p.sigma_r_shapelet);
     // angle to the x faces' line modulo pi, in [-pi/2, pi/2); the y faces' is a quarter turn off
     const double to_x = std::abs(wrapPeriod(leg.pose.theta - s.phi, kPi));
     const double ax = to_x / p.sigma_theta_shapelet;
