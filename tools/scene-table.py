@@ -4,7 +4,7 @@ mapped by `crunchhost --sim` (gaussian sensor, realistic noise unless --noise), 
 per (scene, model) with the mean over seeds of report.json's accuracy figures, the total of wall
 phantoms, the largest model size and the mean wall time.
 
-    python3 tools/scene-table.py [--bin build/default/host/app/crunchhost] [--models paper,rooms,walls:rj]
+    python3 tools/scene-table.py [--bin build/default/host/app/crunchhost] [--models paper,rooms,walls:rj,rooms::marginal]
         [--seeds 5] [--scenes default,test/scenes/empty_arena.json,...] [--noise realistic]
         [--jobs 2] [--out build/scene-table] [--columns recall,precision,...]
 
@@ -34,12 +34,16 @@ def flatten(prefix, value, out):
 
 def run(binary, scene, model, seed, noise, out_dir):
     os.makedirs(out_dir, exist_ok=True)
-    # A model may name its acceptance after a colon: "walls:rj" is --model walls --acceptance rj.
-    name, _, acceptance = model.partition(":")
+    # A model may name its acceptance and its chain fusion after colons: "walls:rj" is
+    # --model walls --acceptance rj, "rooms::marginal" --model rooms --chain-fusion marginal.
+    name, _, rest = model.partition(":")
+    acceptance, _, fusion = rest.partition(":")
     cmd = [binary, "--sim", "--sensor-model", "gaussian", "--noise", noise, "--model", name,
            "--seed", str(seed), "--out", out_dir, "--json"]
     if acceptance:
         cmd += ["--acceptance", acceptance]
+    if fusion:
+        cmd += ["--chain-fusion", fusion]
     if scene != "default":
         cmd[2:2] = ["--scene", scene]
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

@@ -70,7 +70,8 @@ void GlobalChain::anneal() { sampler_.anneal(); }
 ChainResult GlobalChain::result() {
   ChainResult r;
   if (options_.model.sized()) {
-    mapTablesOf(sampler_, options_.model, r.tables, scratch_);
+    // A table whose size the evidence leaves open is not one the map can report.
+    identifiedTablesOf(board_, options_.fuse.size, r.tables);
   } else {
     std::vector<Pose2> found;
     sampler_.mapTables(found);

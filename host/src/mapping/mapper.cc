@@ -1,6 +1,8 @@
 #include "crunch/mapping/mapper.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -142,7 +144,6 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
   FuseOptions agree = options.fuse;
   agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;
-  std::vector<TableHyp> sized_found;
   std::vector<MapTable> kept = fuseTables(chains, agree);  // with sizes (the rooms model)
   for (const MapTable& t : kept) poses.push_back(t.pose);
   if (options.chain_fusion == ChainFusion::kPool) {
@@ -170,7 +171,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     sampler.anneal();
     map.stats.proposals += sampler.stats().proposals;
     sampler.mapTables(poses);
-    if (options.model.sized()) mapTablesOf(sampler, options.model, kept, sized_found);
+    if (options.model.sized()) identifiedTablesOf(board, options.fuse.size, kept);
   }
 
   // Support: per-pose MAPs that agree with each global table.
@@ -231,6 +232,78 @@ void mapTablesOf(const Sampler& sampler, const ModelParams& model, std::vector<M
       out.push_back(modelTable(h.pose, model));
     }
   }
+}
+
+double sizeCertainty(Blackboard& board, int32_t id, double tolerance) {
+  const ModelParams& p = board.params();
+  const TableHyp old = board.table(id);
+  Touched t;
+  t.tables.add(id);
+  // A leg that explains a contact better than the background (eq. 14's c_S) is evidence where
+  // it stands; one that explains none is the table's guess and goes with its corner.
+  std::array<bool, kMaxChildren> carried{};
+  std::array<Pose2, kMaxChildren> leg_pose{};
+  for (int c = 0; c < old.n_children; ++c) {
+    const LegHyp& l = board.leg(old.children[c]);
+    t.legs.add(old.children[c]);
+    leg_pose[static_cast<size_t>(c)] = l.pose;
+    IdSet<64> near;
+    board.shapeletsNear(l.pose.position(), near);
+    bool explains = false;
+    for (int32_t s : near.span())
+      explains |= logShapeletKernel(l, board.shapelet(s), p) > std::log(p.c_S);
+    carried[static_cast<size_t>(c)] = !explains;
+  }
+  const double step = tolerance / 5.0;
+  const int n = static_cast<int>(std::floor((p.size_max_long - p.size_min_side) / step)) + 1;
+  double certainty = 1.0;
+  // Edge e moves while the opposite corner k stays: corner 0 (+x+y) holds the -x and -y edges,
+  // corner 2 (-x-y) the +x and +y edges; e < 2 scans the width, else the depth.
+  constexpr int kHeld[4] = {0, 2, 0, 2};
+  for (int e = 0; e < 4; ++e) {
+    const bool along_x = e < 2;
+    const double now = along_x ? old.width : old.depth;
+    const Vec2 fixed = old.corner(kHeld[e]);
+    double log_all = -std::numeric_limits<double>::infinity(), log_near = log_all;
+    for (int i = 0; i < n; ++i) {
+      const double v = p.size_min_side + i * step;
+      const double w = along_x ? v : old.width, d = along_x ? old.depth : v;
+      if (!std::isfinite(p.logSizePrior(w, d, old.leg))) continue;
+      const Vec2 off =
+          Pose2{0, 0, old.pose.theta}.toWorld(ModelParams::cornerOffset(kHeld[e], w, d, old.leg));
+      board.reshapeTable(id, {fixed.x() - off.x(), fixed.y() - off.y(), old.pose.theta}, w, d,
+                         old.leg);
+      for (int c = 0; c < old.n_children; ++c) {
+        if (!carried[static_cast<size_t>(c)]) continue;
+        const LegHyp& l = board.leg(old.children[c]);
+        const Vec2 at = board.table(id).corner(l.corner);
+        board.moveLeg(old.children[c], {at.x(), at.y(), l.pose.theta});
+      }
+      // Given the chain's structure (these legs are this table's), each child counts by the
+      // table's branch of eq. 9's mixture, -Delta_TL: not by c_L's, which would let the edge
+      // leave its legs behind as orphans at a cost of a few nats anywhere along the range.
+      double j = board.localEnergy(t);
+      for (int c = 0; c < old.n_children; ++c) {
+        const double dtl = deltaTLSized(board.table(id), board.leg(old.children[c]), p, nullptr);
+        j += -dtl - logPresenceOdds(logLegDensity(dtl, true, p), p);
+      }
+      log_all = logAddExp(log_all, j);
+      if (std::abs(v - now) <= 0.5 * tolerance) log_near = logAddExp(log_near, j);
+    }
+    if (std::isfinite(log_all)) certainty *= std::exp(log_near - log_all);
+  }
+  board.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+  for (int c = 0; c < old.n_children; ++c)
+    if (carried[static_cast<size_t>(c)])
+      board.moveLeg(old.children[c], leg_pose[static_cast<size_t>(c)]);
+  return certainty;
+}
+
+void identifiedTablesOf(Blackboard& board, double tolerance, std::vector<MapTable>& out) {
+  out.clear();
+  for (int32_t id = 0; id < board.tableExtent(); ++id)
+    if (board.table(id).alive && sizeCertainty(board, id, tolerance) > 0.5)
+      out.push_back(sizedTable(board.table(id)));
 }
 
 Mapper::Mapper(std::vector<WhiskerMount> mounts, const Vec2& lo, const Vec2& hi,

@@ -79,7 +79,6 @@ class GlobalChain {
   std::vector<ObjectSample> samples_;
   int sample_count_ = 0;
   Sampler sampler_;
-  std::vector<TableHyp> scratch_;
 };
 
 }  // namespace crunch
