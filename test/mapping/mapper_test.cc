@@ -739,8 +739,8 @@ TEST_CASE("Mapper: a fused table's score is the fraction of the chains that hold
   }
 }
 
-TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size; the two legs of one "
-          "side leave its depth open, and such a table is not reported",
+TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size, the two legs of one "
+          "side leave its depth open and such a table is not reported",
           "[mapping][mapper]") {
   // The rooms model (issue 13): a table touched on the two legs of one side could have its other
   // side anywhere nothing swept, so no size within 5 cm has a posterior above one half.
