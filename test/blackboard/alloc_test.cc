@@ -167,3 +167,28 @@ TEST_CASE("Sampler: anneal() with walls (--model walls) performs no heap allocat
   CHECK(sampler.stats().proposals > 1000);
   CHECK(during == 0);
 }
+
+TEST_CASE("Sampler: the rooms model's table split performs no heap allocation", "[blackboard]") {
+  // A 1.6 m table over the outer legs of two touching 0.8 m tables, their inner legs orphans
+  // (sampler_test "a table grown over two touching tables ..."): cold sweeps split it.
+  ModelParams p;
+  p.objects = ObjectModel::kRooms;
+  ModelParams one;
+  one.table_width = 0.8;
+  one.table_depth = 0.5;
+  const Pose2 left{1.1, 1.5, 0.0}, right{1.9, 1.5, 0.0};
+  Blackboard bb(p, 16, 128);
+  for (const Pose2& t : {left, right})
+    for (const auto& s : crunch::testing::TableShapelets(t, one, {0, 1, 2, 3})) bb.pushShapelet(s);
+  const int32_t long_table = bb.addTable({1.5, 1.5, 0.0}, 1.6, 0.5, 0.05);
+  for (int c : {1, 2}) bb.addLeg(crunch::testing::LegOf(left, one, c), 0.05, long_table);
+  for (int c : {0, 3}) bb.addLeg(crunch::testing::LegOf(right, one, c), 0.05, long_table);
+  for (int c : {0, 3}) bb.addLeg(crunch::testing::LegOf(left, one, c), 0.05, kNone);
+  for (int c : {1, 2}) bb.addLeg(crunch::testing::LegOf(right, one, c), 0.05, kNone);
+  Rng rng(3);
+  Sampler sampler(bb, {}, rng);
+  const long long before = g_allocations;
+  for (int i = 0; i < 20; ++i) sampler.sweep(20.0);
+  CHECK(g_allocations - before == 0);
+  CHECK(bb.liveTables() == 2);  // the split was made
+}

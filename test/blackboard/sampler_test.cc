@@ -528,6 +528,54 @@ TEST_CASE("Rooms model: annealing finds a chair's and a desk's size from their l
   CHECK(found[1] >= kSeeds - 1);
 }
 
+TEST_CASE("Rooms model: a table grown over two touching tables splits at their inner legs",
+          "[blackboard]") {
+  // Two 0.8 x 0.5 tables side by side, every leg touched; the chain holds one 1.6 x 0.5 table on
+  // the pair's four outer legs and the four inner legs as orphans (what the rooms model's chains
+  // fall into on adjacent_tables). Splitting is uphill by every other single move: a new table on
+  // the inner legs overlaps the long one (eps_b), and shrinking the long one leaves its far legs.
+  // Cold (beta 20), the split at an inner orphan reaches the pair in one move.
+  const ModelParams p = roomsModel();
+  const ModelParams one = objectOfSize(0.8, 0.5, 0.05);
+  const Pose2 frame{1.5, 1.5, 0.4};
+  const Pose2 left{frame.toWorld({-0.4, 0.0}).x(), frame.toWorld({-0.4, 0.0}).y(), frame.theta};
+  const Pose2 right{frame.toWorld({0.4, 0.0}).x(), frame.toWorld({0.4, 0.0}).y(), frame.theta};
+  const auto split_on = [&](bool split) {
+    int n = 0;
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+      Blackboard bb(p, 16, 128);
+      for (const Pose2& t : {left, right})
+        for (const auto& s : TableShapelets(t, one, {0, 1, 2, 3})) bb.pushShapelet(s);
+      const int32_t long_table = bb.addTable(frame, 1.6, 0.5, 0.05);
+      for (int c : {1, 2}) bb.addLeg(LegOf(left, one, c), 0.05, long_table);
+      for (int c : {0, 3}) bb.addLeg(LegOf(right, one, c), 0.05, long_table);
+      for (int c : {0, 3}) bb.addLeg(LegOf(left, one, c), 0.05, kNone);
+      for (int c : {1, 2}) bb.addLeg(LegOf(right, one, c), 0.05, kNone);
+      Rng rng(seed);
+      SamplerOptions opt;
+      opt.split_tables = split;
+      Sampler sampler(bb, opt, rng);
+      sampler.setAudit(true);
+      for (int i = 0; i < 20; ++i) sampler.sweep(20.0);
+      CHECK(sampler.stats().audit_max_error < 1e-9);
+      CHECK(sampler.stats().audit_cache_max_error < 1e-9);
+      std::vector<TableHyp> map;
+      sampler.mapTables(map);
+      int pair = 0;
+      for (const TableHyp& t : map)
+        for (const Pose2& want : {left, right})
+          pair += std::hypot(t.pose.x - want.x, t.pose.y - want.y) < kPosTol &&
+                  std::abs(std::max(t.width, t.depth) - 0.8) < 0.03;
+      n += pair == 2 && map.size() == 2;
+    }
+    return n;
+  };
+  const int with = split_on(true), without = split_on(false);
+  INFO("the pair found on " << with << " of 10 seeds with the split, " << without << " without");
+  CHECK(with >= 8);
+  CHECK(without <= 2);
+}
+
 TEST_CASE("Rooms model: the paper's model keeps its one size", "[blackboard]") {
   // Under kPaper no move changes a size: every table is the paper's, every leg its side.
   ModelParams p;

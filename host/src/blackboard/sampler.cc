@@ -192,6 +192,8 @@ void Sampler::sweep(double beta) {
         if (u < 0.4) jitterTable(h.id, beta);
         else if (u < 0.85) resizeTable(h.id, beta);
         else tableLegSide(h.id, beta);
+        // and, where an orphan leg stands on its long side, a split there.
+        if (opt_.split_tables && bb_.table(h.id).alive) splitTable(h.id, beta);
       }
     } else {
       if (!bb_.leg(h.id).alive) continue;
@@ -1698,6 +1700,121 @@ void Sampler::resizeTable(int32_t id, double beta) {
   bb_.reshapeTable(id, pose, w, d, old.leg);
   const double e1 = bb_.energyAfter(t);
   if (!decide(e1 - e0, beta)) bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+}
+
+void Sampler::splitTable(int32_t id, double beta) {
+  const ModelParams& p = bb_.params();
+  const TableHyp old = bb_.table(id);
+  // The long axis: the table frame's x (a = 0) when width >= depth, else its y (a = 1).
+  const bool along_x = old.width >= old.depth;
+  const double len = along_x ? old.width : old.depth, across = along_x ? old.depth : old.width;
+  const double half = 0.5 * len, r = p.cornerLinkRadius();
+  const double edge = 0.5 * (across - old.leg);  // the long sides' leg centres, +-edge across
+  // Orphans on a long side, far enough from both ends that each piece is a table the prior
+  // allows; one of them drawn uniformly.
+  std::array<int32_t, 8> cand{};
+  int n = 0;
+  bb_.legsNear(old.pose.position(), 0.5 * std::hypot(old.width, old.depth) + r, [&](int32_t o) {
+    const LegHyp& l = bb_.leg(o);
+    if (!l.alive || l.parent != kNone || n == 8) return;
+    const Vec2 q = old.pose.toLocal(l.pose.position());
+    const double u = along_x ? q.x() : q.y(), v = along_x ? q.y() : q.x();
+    if (std::abs(std::abs(v) - edge) > r) return;
+    const double cut = u + 0.5 * l.side;  // the first piece ends at the orphan's outer face
+    if (cut + half < p.size_min_side || half - cut < p.size_min_side) return;
+    cand[static_cast<size_t>(n++)] = o;
+  });
+  if (n == 0) return;
+  // The cut: in the gap between the drawn orphan and its neighbour on the same side when one
+  // stands within a leg of it (the inner legs of two touching tables), else at the orphan's
+  // face towards either end (a coin).
+  const int32_t seed = cand[static_cast<size_t>(rng_.below(static_cast<uint32_t>(n)))];
+  const LegHyp& sl = bb_.leg(seed);
+  const Vec2 sq = old.pose.toLocal(sl.pose.position());
+  const double su = along_x ? sq.x() : sq.y(), sv = along_x ? sq.y() : sq.x();
+  double cut = su + (rng_.uniform() < 0.5 ? 0.5 : -0.5) * sl.side, gap = p.leg_max + r;
+  for (int i = 0; i < n; ++i) {
+    const LegHyp& ol = bb_.leg(cand[static_cast<size_t>(i)]);
+    const Vec2 oq = old.pose.toLocal(ol.pose.position());
+    const double ou = along_x ? oq.x() : oq.y(), ov = along_x ? oq.y() : oq.x();
+    if (cand[static_cast<size_t>(i)] == seed || ov * sv <= 0.0 || std::abs(ou - su) >= gap)
+      continue;
+    gap = std::abs(ou - su);
+    cut = ou > su ? 0.5 * ((su + 0.5 * sl.side) + (ou - 0.5 * ol.side))
+                  : 0.5 * ((ou + 0.5 * ol.side) + (su - 0.5 * sl.side));
+  }
+  const double len_a = cut + half, len_b = half - cut;
+  const double wa = along_x ? len_a : old.width, da = along_x ? old.depth : len_a;
+  const double wb = along_x ? len_b : old.width, db = along_x ? old.depth : len_b;
+  if (!std::isfinite(p.logSizePrior(wa, da, old.leg)) ||
+      !std::isfinite(p.logSizePrior(wb, db, old.leg)))
+    return;
+  const auto at = [&](double u) {
+    const Vec2 c = old.pose.toWorld(along_x ? Vec2{u, 0.0} : Vec2{0.0, u});
+    return Pose2{c.x(), c.y(), old.pose.theta};
+  };
+  const Pose2 pose_a = at(0.5 * (cut - half)), pose_b = at(0.5 * (cut + half));
+  // Children at the far end (+u: corners 0, 3 along x; corners 0, 1 along y) go to the new table.
+  const auto far_end = [&](int corner) {
+    return along_x ? (corner == 0 || corner == 3) : (corner == 0 || corner == 1);
+  };
+  IdSet<kMaxChildren> moved;
+  for (int i = 0; i < old.n_children; ++i)
+    if (far_end(bb_.leg(old.children[i]).corner)) moved.add(old.children[i]);
+  // At each of the pieces' new corners (the cut's two sides) the nearest orphan joins, while
+  // the piece has room for a child.
+  TableHyp a = old, b = old;
+  a.pose = pose_a;
+  a.width = wa;
+  a.depth = da;
+  b.pose = pose_b;
+  b.width = wb;
+  b.depth = db;
+  IdSet<4> join_a, join_b;
+  const auto nearestOrphan = [&](const Vec2& c, int32_t skip) {
+    int32_t best = kNone;
+    double best_d2 = r * r;
+    bb_.legsNear(c, r, [&](int32_t o) {
+      const LegHyp& l = bb_.leg(o);
+      const double d2 = (l.pose.position() - c).squaredNorm();
+      if (l.alive && l.parent == kNone && o != skip && !join_a.contains(o) && d2 <= best_d2) {
+        best = o;
+        best_d2 = d2;
+      }
+    });
+    return best;
+  };
+  const int near_children = old.n_children - moved.n;
+  for (int k = 0; k < 4; ++k) {
+    if (!far_end(k) || near_children + join_a.n >= kMaxChildren) continue;
+    if (const int32_t o = nearestOrphan(a.corner(k), kNone); o != kNone) join_a.add(o);
+  }
+  for (int k = 0; k < 4; ++k) {
+    if (far_end(k) || moved.n + join_b.n >= kMaxChildren) continue;
+    const int32_t o = nearestOrphan(b.corner(k), kNone);
+    if (o != kNone && !join_b.contains(o)) join_b.add(o);
+  }
+  Touched t;
+  t.tables.add(id);
+  for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
+  for (int32_t o : join_a.span()) t.legs.add(o);
+  for (int32_t o : join_b.span()) t.legs.add(o);
+  begin();
+  const double e0 = bb_.energyBefore(t);
+  const int32_t nb = bb_.addTable(pose_b, wb, db, old.leg);
+  bb_.reshapeTable(id, pose_a, wa, da, old.leg);
+  for (int32_t o : moved.span()) bb_.setParent(o, nb);
+  for (int32_t o : join_a.span()) bb_.setParent(o, id);
+  for (int32_t o : join_b.span()) bb_.setParent(o, nb);
+  t.tables.add(nb);
+  const double e1 = bb_.energyAfter(t);
+  if (decide(e1 - e0, beta)) return;
+  for (int32_t o : join_b.span()) bb_.setParent(o, kNone);
+  for (int32_t o : join_a.span()) bb_.setParent(o, kNone);
+  for (int32_t o : moved.span()) bb_.setParent(o, id);
+  bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+  bb_.killTable(nb);
+  bb_.releaseTable(nb);
 }
 
 void Sampler::tableLegSide(int32_t id, double beta) {

@@ -97,6 +97,9 @@ struct SamplerOptions {
   // (fitRigid) instead of the proposer's corner and orientation, and turns its legs to its axes
   // (docs/BLACKBOARD.md "Tables fitted to their legs"). The paper's model keeps its proposal.
   bool fit_parent = true;
+  // Under the rooms model (ModelParams::sized()), each sweep also proposes to split every table
+  // at an orphan leg on its long side (splitTable). Off: measurement and tests only.
+  bool split_tables = true;
   bool prune = true;
   // Incremental energies (Blackboard::energyBefore): a move evaluates the terms it changes once,
   // after the move, taking the before side from the cache. Off: both sides afresh (the reference
@@ -380,6 +383,12 @@ class Sampler {
   void tableLegSide(int32_t id, double beta);
   void legSide(int32_t id, double beta);
   void proposeParentSized(int32_t leg, double beta);
+  // Splits a table across its long axis at an orphan leg standing on one of its long sides: the
+  // table keeps its children at one end and ends at that leg (a corner of it), a new table
+  // touching it takes the children at the other end, and orphans at the two new tables' new
+  // corners are adopted (docs/BLACKBOARD.md "Splitting a table at an orphan leg"). The reverse
+  // of what proposeParent does when one table grows over two neighbours' outer legs.
+  void splitTable(int32_t id, double beta);
   // A signed centre-to-centre span of one side of a table proposed for a leg of `leg_side`,
   // drawn from the prior's range; `other` is the other side's span (0: unknown).
   double priorSpan(double leg_side, double other);
