@@ -1763,21 +1763,16 @@ void Sampler::splitTable(int32_t id, double beta) {
     if (far_end(bb_.leg(old.children[i]).corner)) moved.add(old.children[i]);
   // At each of the pieces' new corners (the cut's two sides) the nearest orphan joins, while
   // the piece has room for a child.
-  TableHyp a = old, b = old;
-  a.pose = pose_a;
-  a.width = wa;
-  a.depth = da;
-  b.pose = pose_b;
-  b.width = wb;
-  b.depth = db;
+  const TableHyp a = reshaped(old, pose_a, wa, da, old.leg);
+  const TableHyp b = reshaped(old, pose_b, wb, db, old.leg);
   IdSet<4> join_a, join_b;
-  const auto nearestOrphan = [&](const Vec2& c, int32_t skip) {
+  const auto nearestOrphan = [&](const Vec2& c) {
     int32_t best = kNone;
     double best_d2 = r * r;
     bb_.legsNear(c, r, [&](int32_t o) {
       const LegHyp& l = bb_.leg(o);
       const double d2 = (l.pose.position() - c).squaredNorm();
-      if (l.alive && l.parent == kNone && o != skip && !join_a.contains(o) && d2 <= best_d2) {
+      if (l.alive && l.parent == kNone && !join_a.contains(o) && d2 <= best_d2) {
         best = o;
         best_d2 = d2;
       }
@@ -1787,11 +1782,11 @@ void Sampler::splitTable(int32_t id, double beta) {
   const int near_children = old.n_children - moved.n;
   for (int k = 0; k < 4; ++k) {
     if (!far_end(k) || near_children + join_a.n >= kMaxChildren) continue;
-    if (const int32_t o = nearestOrphan(a.corner(k), kNone); o != kNone) join_a.add(o);
+    if (const int32_t o = nearestOrphan(a.corner(k)); o != kNone) join_a.add(o);
   }
   for (int k = 0; k < 4; ++k) {
     if (far_end(k) || moved.n + join_b.n >= kMaxChildren) continue;
-    const int32_t o = nearestOrphan(b.corner(k), kNone);
+    const int32_t o = nearestOrphan(b.corner(k));
     if (o != kNone && !join_b.contains(o)) join_b.add(o);
   }
   Touched t;
