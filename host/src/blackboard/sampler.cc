@@ -1705,7 +1705,7 @@ void Sampler::resizeTable(int32_t id, double beta) {
 void Sampler::splitTable(int32_t id, double beta) {
   const ModelParams& p = bb_.params();
   const TableHyp old = bb_.table(id);
-  // The long axis: the table frame's x (a = 0) when width >= depth, else its y (a = 1).
+  // The long axis: the table frame's x when width >= depth, else its y (u along it, v across).
   const bool along_x = old.width >= old.depth;
   const double len = along_x ? old.width : old.depth, across = along_x ? old.depth : old.width;
   const double half = 0.5 * len, r = p.cornerLinkRadius();

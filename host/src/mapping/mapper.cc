@@ -243,10 +243,12 @@ double sizeCertainty(Blackboard& board, int32_t id, double tolerance) {
   // it stands; one that explains none is the table's guess and goes with its corner.
   std::array<bool, kMaxChildren> carried{};
   std::array<Pose2, kMaxChildren> leg_pose{};
+  std::array<int, kMaxChildren> leg_corner{};  // a carried leg keeps its corner as the top grows
   for (int c = 0; c < old.n_children; ++c) {
     const LegHyp& l = board.leg(old.children[c]);
     t.legs.add(old.children[c]);
     leg_pose[static_cast<size_t>(c)] = l.pose;
+    leg_corner[static_cast<size_t>(c)] = l.corner;
     IdSet<64> near;
     board.shapeletsNear(l.pose.position(), near);
     bool explains = false;
@@ -275,9 +277,8 @@ double sizeCertainty(Blackboard& board, int32_t id, double tolerance) {
                          old.leg);
       for (int c = 0; c < old.n_children; ++c) {
         if (!carried[static_cast<size_t>(c)]) continue;
-        const LegHyp& l = board.leg(old.children[c]);
-        const Vec2 at = board.table(id).corner(l.corner);
-        board.moveLeg(old.children[c], {at.x(), at.y(), l.pose.theta});
+        const Vec2 at = board.table(id).corner(leg_corner[static_cast<size_t>(c)]);
+        board.moveLeg(old.children[c], {at.x(), at.y(), leg_pose[static_cast<size_t>(c)].theta});
       }
       // Given the chain's structure (these legs are this table's), each child counts by the
       // table's branch of eq. 9's mixture, -Delta_TL: not by c_L's, which would let the edge
