@@ -806,3 +806,53 @@ TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size, the
   CHECK(guessed.totalEnergy() == Approx(before_guessed).margin(1e-12));
   CHECK(guessed.leg(guessed.table(g).children[0]).pose.x == guessed.table(g).corner(0).x());
 }
+
+TEST_CASE("placementCertainty: three touched legs place a table of the one size, two legs of one "
+          "side leave its mirror image as likely",
+          "[mapping][mapper]") {
+  // The walls model (issue 13): the table's size is the model's, so the two legs of one side fix
+  // it up to its reflection across that side. When nothing tells the two apart, neither is a
+  // table the map can report.
+  ModelParams p;
+  p.objects = ObjectModel::kWalls;
+  const Pose2 pose{1.5, 1.5, 0.3};
+  const auto board_with = [&](std::initializer_list<int> touched_corners, Blackboard& bb) {
+    const int32_t id = bb.addTable(pose);
+    for (int c = 0; c < 4; ++c) {
+      const Vec2 at = bb.table(id).corner(c);
+      bb.addLeg({at.x(), at.y(), wrapPeriod(pose.theta, kPi / 2)}, id);
+    }
+    for (int c : touched_corners) {
+      const Vec2 at = bb.table(id).corner(c);
+      Shapelet s;
+      s.x = at.x() + 0.025 * std::cos(pose.theta);
+      s.y = at.y() + 0.025 * std::sin(pose.theta);
+      s.oriented = false;
+      bb.pushShapelet(s);
+    }
+    return id;
+  };
+  Blackboard side(p, 8, 64);
+  const int32_t a = board_with({0, 1}, side);  // the +y side's two legs
+  const double before = side.totalEnergy();
+  const Pose2 leg0 = side.leg(side.table(a).children[0]).pose;
+  CHECK(placementCertainty(side, a) == 0.5);
+  CHECK(side.totalEnergy() == Approx(before).margin(1e-12));
+  CHECK(side.leg(side.table(a).children[0]).pose.x == leg0.x);
+  std::vector<MapTable> out;
+  identifiedTablesOf(side, 0.10, out);
+  CHECK(out.empty());
+
+  Blackboard three(p, 8, 64);
+  const int32_t b = board_with({0, 1, 2}, three);
+  CHECK(placementCertainty(three, b) > 0.99);
+  identifiedTablesOf(three, 0.10, out);
+  CHECK(out.size() == 1);
+
+  // The paper's model reports what its chains hold, as its figures always did.
+  ModelParams paper;
+  Blackboard old(paper, 8, 64);
+  old.addTable(pose);
+  identifiedTablesOf(old, 0.10, out);
+  CHECK(out.size() == 1);
+}

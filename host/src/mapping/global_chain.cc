@@ -69,8 +69,8 @@ void GlobalChain::anneal() { sampler_.anneal(); }
 
 ChainResult GlobalChain::result() {
   ChainResult r;
-  if (options_.model.sized()) {
-    // A table whose size the evidence leaves open is not one the map can report.
+  if (options_.model.walled()) {
+    // A table whose size or place the evidence leaves open is not one the map can report.
     identifiedTablesOf(board_, options_.fuse.size, r.tables);
   } else {
     std::vector<Pose2> found;

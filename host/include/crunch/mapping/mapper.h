@@ -159,8 +159,19 @@ void mapTablesOf(const Sampler& sampler, const ModelParams& model, std::vector<M
 // carried legs are moved and restored; cached energies are invalidated, as by any change
 // outside a sweep).
 double sizeCertainty(Blackboard& board, int32_t id, double tolerance);
-// The map tables (each of its own size) of `board`'s live tables whose sizeCertainty is above
-// one half: a chain's MAP of the rooms model without the tables whose size it only guessed.
+// How surely the evidence fixes where a table of the model's one size stands (ObjectModel::kWalls;
+// docs/BLACKBOARD.md "A table whose place the evidence leaves open"): among the paper's 8
+// placements of the table with its first touched leg at a corner (4 corners x 2 axes) that put
+// every touched leg at a corner of its own, the posterior mass of the chain's own, each weighed
+// as sizeCertainty weighs an edge (exp(J) at beta = 1 given the structure, untouched legs
+// carried to the free corners). 1 for three legs in an L (one placement fits); about 1/2 for
+// the two legs of one side when nothing tells the table's two mirror images apart; 1 when no
+// leg is touched (nothing to place it by). The board is left as it was.
+double placementCertainty(Blackboard& board, int32_t id);
+// The map tables of `board`'s live tables the evidence identifies: under the rooms model those
+// whose sizeCertainty is above one half (each of its own size), under the walls model those
+// whose placementCertainty is above one half, under the paper's model all (its figures stay).
+// A chain's MAP without the tables it only guessed.
 void identifiedTablesOf(Blackboard& board, double tolerance, std::vector<MapTable>& out);
 
 }  // namespace crunch
