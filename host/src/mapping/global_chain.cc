@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "crunch/mapping/identified_tables.h"
 #include "crunch/mapping/mapper.h"
 
 namespace crunch {
