@@ -126,7 +126,8 @@ double placementCertainty(Blackboard& board, int32_t id) {
   for (int c = 0; c < ch.n; ++c)
     if (!ch.carried[static_cast<size_t>(c)])
       board.shapeletsNear(ch.pose[static_cast<size_t>(c)].position(), t.shapelets);
-  double log_all = -std::numeric_limits<double>::infinity(), log_now = log_all;
+  // The chain's own placement and the others, apart: their ratio decides a tie below.
+  double log_now = -std::numeric_limits<double>::infinity(), log_others = log_now;
   // The paper's 8 placements of a table with a given leg at a corner (eq. 29's smart proposal):
   // the anchor leg at corner k, the table's axis at theta or theta + pi/2.
   for (int turn = 0; turn < 2; ++turn) {
@@ -164,18 +165,17 @@ double placementCertainty(Blackboard& board, int32_t id) {
         board.moveLeg(ch.id[ck], {at.x(), at.y(), theta});
       }
       const double j = energyGivenStructure(board, id, t);
-      log_all = logAddExp(log_all, j);
       // The chain's own placement: the anchor at its corner, the axis unturned.
       if (turn == 0 && k == ch.corner[static_cast<size_t>(first)]) log_now = j;
+      else log_others = logAddExp(log_others, j);
     }
   }
   restore(board, id, old, ch);
+  const double log_all = logAddExp(log_now, log_others);
   if (!std::isfinite(log_all)) return 1.0;
   // Two placements the model scores alike within rounding (mirror images nothing tells apart)
   // are a tie, not a preference for the chain's: 1/2 exactly.
-  const double odds = log_now - (log_all > log_now ? std::log(-std::expm1(log_now - log_all)) + log_all
-                                                   : -std::numeric_limits<double>::infinity());
-  if (std::abs(odds) < 1e-9 * std::max(1.0, std::abs(log_now))) return 0.5;
+  if (std::abs(log_now - log_others) < 1e-9 * std::max(1.0, std::abs(log_now))) return 0.5;
   return std::exp(log_now - log_all);
 }
 
