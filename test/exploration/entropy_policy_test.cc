@@ -41,7 +41,7 @@ TEST_CASE("Entropy: rasterised draws, and the paper's §3.4 failure reproduced",
   north.pose = {1.375, 1.725, 0.0};
   south.pose = {1.375, 1.275, 0.0};
   std::vector<MapSample> draws;
-  for (int i = 0; i < 16; ++i) draws.push_back({{i % 2 ? north : south}, {}});
+  for (int i = 0; i < 16; ++i) draws.push_back({{i % 2 ? north : south}, {}, {}});
   const FovealGrid g = rasteriseFovea(draws, {1.4, 1.5}, EntropyOptions{});
   REQUIRE(g.n == 32);
   REQUIRE(g.draws == 16);

@@ -68,7 +68,7 @@ TEST_CASE("Infogain: rival tables send the robot to touch a disputed leg (Fig. 7
           "[exploration][infogain]") {
   World w;
   knownRoomWithTouchedLegs(w);
-  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}});
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
   State s(w, {2.6, 2.6, 0.0});
   InfogainPolicy policy(PolicyOptions{});
   Rng rng(1);
@@ -92,7 +92,7 @@ TEST_CASE("Infogain: draws that agree are worth nothing, a known empty room stop
           "[exploration][infogain]") {
   World w;
   knownRoomWithTouchedLegs(w);
-  for (int i = 0; i < 16; ++i) w.samples.push_back({{kNorth}, {}});  // no rival
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{kNorth}, {}, {}});  // no rival
   State s(w, {2.6, 2.6, 0.0});
   InfogainPolicy policy(PolicyOptions{});
   Rng rng(1);

@@ -5,6 +5,8 @@
 #include <limits>
 #include <tuple>
 
+#include "crunch/exploration/draw_completion.h"
+
 namespace crunch::exploration {
 
 double binaryEntropyBits(double p) {
@@ -374,9 +376,16 @@ CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pos
   return v;
 }
 
-Decision InfogainPolicy::next(const ExploreState& state, Rng& /*rng*/) {
+Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   // The pose just whisked (the robot stands where its last whisk began).
-  if (state.whisks > 0) whisked_.push_back(state.robot);
+  if (given.whisks > 0) whisked_.push_back(given.robot);
+  ExploreState state = given;
+  if (io_.complete_orphans) {
+    completed_.assign(given.samples.begin(), given.samples.end());
+    for (MapSample& draw : completed_)
+      completeOrphanLegs(draw, given.known, given.model, rng, io_.completion_tries);
+    state.samples = completed_;
+  }
   prepare(state);
   values_.clear();
   std::vector<Pose2> candidates;

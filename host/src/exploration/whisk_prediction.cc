@@ -24,6 +24,7 @@ void WhiskObstacles::assign(const MapSample& sample, std::span<const MapWall> fi
   clear();
   for (const MapTable& t : sample.tables)
     for (const OrientedRect& r : legSquares(t)) legs.push_back(r);
+  for (const MapLeg& l : sample.legs) legs.push_back(OrientedRect{l.pose, l.side, l.side});
   walls.assign(sample.walls.begin(), sample.walls.end());
   walls.insert(walls.end(), fixed.begin(), fixed.end());
   prepare();

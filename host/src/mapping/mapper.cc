@@ -340,6 +340,11 @@ bool Mapper::continueSamples(int n, double beta, int sweeps_between, std::vector
 void Mapper::drawOne(std::vector<MapSample>& out) {
   MapSample draw;
   mapTablesOf(*sample_sampler_, options_.model, draw.tables, sized_tables_);
+  const Blackboard& bb = *sample_board_;
+  for (int32_t id = 0; id < bb.legExtent(); ++id) {
+    const LegHyp& l = bb.leg(id);
+    if (l.alive && l.parent == kNone) draw.legs.push_back({l.pose, l.side});
+  }
   if (options_.model.walled()) {
     std::vector<WallHyp> walls;
     sample_sampler_->mapWalls(walls);

@@ -42,7 +42,8 @@
 // whose travel is finite, and for every leg of every draw the poses at whisker reach facing it
 // from 8 directions (the poses that would settle that leg).
 //
-// Randomness: none (the rng is unused; ties go to the first candidate). Allocation: in next().
+// Randomness: the rng completes the draws' orphan legs (InfogainOptions::complete_orphans); ties
+// go to the first candidate. Allocation: in next().
 #pragma once
 
 #include <memory>
@@ -69,6 +70,12 @@ struct InfogainOptions {
   // physics sensor (10 m, 4 seeds) 0.75 against 0.63 (docs/EXPLORATION.md, "Driving through
   // unknown space").
   bool path_sweep = false;
+  // Complete each draw's orphan legs into the tables they imply before scoring
+  // (draw_completion.h): the draws then disagree about where a once-touched leg's other legs
+  // stand, as the posterior does, instead of agreeing that nothing stands there. On by default:
+  // docs/EXPLORATION.md ("Orphan legs: the tables a draw implies") has the measurement.
+  bool complete_orphans = true;
+  int completion_tries = 64;
   WhiskPredictionOptions prediction;
 };
 
@@ -142,6 +149,7 @@ class InfogainPolicy final : public ExplorePolicy {
   double rmin_ = 0.0, rmax_ = 0.0;  // the whiskers' bases and tips from the centre (prepare)
   double lambda_ = 1.0;
   std::vector<Pose2> whisked_;
+  std::vector<MapSample> completed_;  // next(): the state's draws with their orphans completed
   std::vector<CandidateValue> values_;
 };
 

@@ -74,8 +74,8 @@ struct WhiskObstacles {
   }
   // Fills `frames` from `legs`. predict() prepares on the fly (slower) when they differ in size.
   void prepare();
-  // The four leg squares of every table of `sample` and its walls; `fixed` walls (e.g. the
-  // arena's boundary) appended.
+  // The four leg squares of every table of `sample`, its orphan legs and its walls; `fixed`
+  // walls (e.g. the arena's boundary) appended.
   void assign(const MapSample& sample, std::span<const MapWall> fixed = {});
 };
 

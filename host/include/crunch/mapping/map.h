@@ -54,10 +54,18 @@ struct MapStats {
   int global_threads = 0;
 };
 
+// A leg of a posterior draw that no table of the draw holds (eq. 13's null parent).
+struct MapLeg {
+  Pose2 pose;  // centre; theta meaningful modulo pi/2
+  double side = kStandardLegSide;
+};
+
 // One draw of the map from a sampler's chain (Mapper::drawSamples): its live tables (each of
-// its own size under the rooms model) and walls. What exploration predicts from.
+// its own size under the rooms model), its orphan legs (touched, no table placed over them yet)
+// and walls. What exploration predicts from.
 struct MapSample {
   std::vector<MapTable> tables;
+  std::vector<MapLeg> legs;
   std::vector<MapWall> walls;
 };
 
