@@ -125,3 +125,96 @@ TEST_CASE("placementCertainty: three touched legs place a table of the one size,
   identifiedTablesOf(old, 0.10, out);
   CHECK(out.size() == 1);
 }
+
+TEST_CASE("drawOpenTable: an open side is drawn from its conditional, a mirror tie splits the "
+          "draws, a pinned table is drawn as held, and the board is left as it was",
+          "[mapping][mapper]") {
+  const Pose2 pose{1.5, 1.5, 0.3};
+  // A 0.8 x 0.5 m table with legs at every corner, contacts at the corners `touched`.
+  const auto board_with = [&](std::initializer_list<int> touched, Blackboard& bb) {
+    const int32_t id = bb.addTable(pose, 0.8, 0.5, 0.05);
+    for (int c = 0; c < 4; ++c) {
+      const Vec2 at = bb.table(id).corner(c);
+      bb.addLeg({at.x(), at.y(), wrapPeriod(pose.theta, kPi / 2)}, 0.05, id);
+    }
+    for (int c : touched) {
+      const Vec2 at = bb.table(id).corner(c);
+      Shapelet s;
+      s.x = at.x() + 0.025 * std::cos(pose.theta);
+      s.y = at.y() + 0.025 * std::sin(pose.theta);
+      s.oriented = false;
+      bb.pushShapelet(s);
+    }
+    return id;
+  };
+  Rng rng(17);
+
+  // Rooms: the -y side's two legs touched. The width is pinned by them; the depth is open, so
+  // the draws spread over the prior's range, and the touched legs stay at their corners.
+  ModelParams rooms;
+  rooms.objects = ObjectModel::kRooms;
+  Blackboard open(rooms, 8, 64);
+  const int32_t a = board_with({2, 3}, open);
+  const double before = open.totalEnergy();
+  const Vec2 c2 = open.table(a).corner(2), c3 = open.table(a).corner(3);
+  double dmin = 10.0, dmax = 0.0, wmin = 10.0, wmax = 0.0;
+  for (int i = 0; i < 200; ++i) {
+    const MapTable t = drawOpenTable(open, a, 0.02, rng);
+    // sizedTable writes width >= depth: the side along the legs' line is the 0.8 m one unless
+    // the drawn depth is longer.
+    const double along = std::abs(std::remainder(t.pose.theta - pose.theta, kPi)) < 0.1
+                             ? t.width : t.depth;
+    const double across = along == t.width ? t.depth : t.width;
+    wmin = std::min(wmin, along), wmax = std::max(wmax, along);
+    dmin = std::min(dmin, across), dmax = std::max(dmax, across);
+    // Both touched legs stand at corners of the drawn table.
+    for (const Vec2& leg : {c2, c3}) {
+      double best = 1e9;
+      for (int c = 0; c < 4; ++c) {
+        const Vec2 q =
+            t.pose.toWorld(ModelParams::cornerOffset(c, t.width, t.depth, t.leg));
+        best = std::min(best, (q - leg).norm());
+      }
+      CHECK(best < 0.03);
+    }
+  }
+  INFO("along " << wmin << ".." << wmax << ", across " << dmin << ".." << dmax);
+  CHECK(wmax - wmin < 0.05);   // pinned by the two touched legs
+  CHECK(dmax - dmin > 0.5);    // open: nothing touched or swept on the far side
+  CHECK(open.totalEnergy() == Approx(before).margin(1e-12));
+  CHECK(open.table(a).depth == 0.5);
+
+  // Three touched legs pin the table: every draw is the chain's.
+  Blackboard pinned(rooms, 8, 64);
+  const int32_t b = board_with({1, 2, 3}, pinned);
+  for (int i = 0; i < 20; ++i) {
+    const MapTable t = drawOpenTable(pinned, b, 0.02, rng);
+    CHECK(t.pose.x == pinned.table(b).pose.x);
+    CHECK(t.width == Approx(0.8));
+    CHECK(t.depth == Approx(0.5));
+  }
+
+  // Walls: the two legs of one side and nothing else: the table and its mirror image across that
+  // side score alike, so the draws split between them.
+  ModelParams walls;
+  walls.objects = ObjectModel::kWalls;
+  Blackboard side(walls, 8, 64);
+  const int32_t s = board_with({0, 1}, side);
+  const Vec2 centre = side.table(s).pose.position();
+  int same = 0, mirrored = 0;
+  for (int i = 0; i < 400; ++i) {
+    const MapTable t = drawOpenTable(side, s, 0.02, rng);
+    const double d = (t.pose.position() - centre).norm();
+    if (d < 1e-6) ++same;
+    else if (std::abs(d - 0.45) < 1e-6) ++mirrored;  // reflected across the +y side: depth - leg
+  }
+  INFO("same " << same << ", mirrored " << mirrored);
+  CHECK(same + mirrored == 400);
+  CHECK(std::abs(same - 200) < 60);  // 1/2 each: sd 10, 6 sd
+
+  // The paper's model: the chain's table.
+  ModelParams paper;
+  Blackboard old(paper, 8, 64);
+  const int32_t o = old.addTable(pose);
+  CHECK(drawOpenTable(old, o, 0.02, rng).pose.x == pose.x);
+}

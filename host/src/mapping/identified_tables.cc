@@ -67,76 +67,60 @@ void restore(Blackboard& board, int32_t id, const TableHyp& old, const Children&
     board.moveLeg(ch.id[static_cast<size_t>(c)], ch.pose[static_cast<size_t>(c)]);
 }
 
-}  // namespace
-
-double sizeCertainty(Blackboard& board, int32_t id, double tolerance) {
+// Table `id` reshaped from `from` with edge e at `v`, the corner opposite the edge held
+// (corner 0, +x+y, holds the -x and -y edges, corner 2 the +x and +y edges; e < 2 moves the
+// width, else the depth), its carried legs with their corners. False (nothing changed) outside
+// the size prior.
+bool placeEdge(Blackboard& board, int32_t id, const TableHyp& from, int e, double v,
+               const Children& ch) {
   const ModelParams& p = board.params();
-  const TableHyp old = board.table(id);
-  Touched t;
-  const Children ch = childrenOf(board, id, t);
-  const double step = tolerance / 5.0;
-  const int n = static_cast<int>(std::floor((p.size_max_long - p.size_min_side) / step)) + 1;
-  double certainty = 1.0;
-  // Edge e moves while the opposite corner k stays: corner 0 (+x+y) holds the -x and -y edges,
-  // corner 2 (-x-y) the +x and +y edges; e < 2 scans the width, else the depth.
   constexpr int kHeld[4] = {0, 2, 0, 2};
-  for (int e = 0; e < 4; ++e) {
-    const bool along_x = e < 2;
-    const double now = along_x ? old.width : old.depth;
-    const Vec2 fixed = old.corner(kHeld[e]);
-    double log_all = -std::numeric_limits<double>::infinity(), log_near = log_all;
-    for (int i = 0; i < n; ++i) {
-      const double v = p.size_min_side + i * step;
-      const double w = along_x ? v : old.width, d = along_x ? old.depth : v;
-      if (!std::isfinite(p.logSizePrior(w, d, old.leg))) continue;
-      const Vec2 off =
-          Pose2{0, 0, old.pose.theta}.toWorld(ModelParams::cornerOffset(kHeld[e], w, d, old.leg));
-      board.reshapeTable(id, {fixed.x() - off.x(), fixed.y() - off.y(), old.pose.theta}, w, d,
-                         old.leg);
-      for (int c = 0; c < ch.n; ++c) {
-        const auto k = static_cast<size_t>(c);
-        if (!ch.carried[k]) continue;
-        const Vec2 at = board.table(id).corner(ch.corner[k]);
-        board.moveLeg(ch.id[k], {at.x(), at.y(), ch.pose[k].theta});
-      }
-      const double j = energyGivenStructure(board, id, t);
-      log_all = logAddExp(log_all, j);
-      if (std::abs(v - now) <= 0.5 * tolerance) log_near = logAddExp(log_near, j);
-    }
-    if (std::isfinite(log_all)) certainty *= std::exp(log_near - log_all);
+  const double w = e < 2 ? v : from.width, d = e < 2 ? from.depth : v;
+  if (!std::isfinite(p.logSizePrior(w, d, from.leg))) return false;
+  const Vec2 fixed = from.corner(kHeld[e]);
+  const Vec2 off =
+      Pose2{0, 0, from.pose.theta}.toWorld(ModelParams::cornerOffset(kHeld[e], w, d, from.leg));
+  board.reshapeTable(id, {fixed.x() - off.x(), fixed.y() - off.y(), from.pose.theta}, w, d,
+                     from.leg);
+  for (int c = 0; c < ch.n; ++c) {
+    const auto k = static_cast<size_t>(c);
+    if (!ch.carried[k]) continue;
+    const Vec2 at = board.table(id).corner(ch.corner[k]);
+    board.moveLeg(ch.id[k], {at.x(), at.y(), ch.pose[k].theta});
   }
-  restore(board, id, old, ch);
-  return certainty;
+  return true;
 }
 
-double placementCertainty(Blackboard& board, int32_t id) {
+// f(value, J given the structure) for edge e at each value of the size prior's range in steps
+// of `step` (placeEdge).
+template <typename F>
+void scanEdge(Blackboard& board, int32_t id, const TableHyp& from, int e, double step,
+              const Children& ch, const Touched& t, F&& f) {
   const ModelParams& p = board.params();
-  const TableHyp old = board.table(id);
-  Touched t;
-  const Children ch = childrenOf(board, id, t);
-  int first = -1;  // the first child that is evidence
-  for (int c = 0; c < ch.n && first < 0; ++c)
-    if (!ch.carried[static_cast<size_t>(c)]) first = c;
-  if (first < 0) return 1.0;  // nothing to place it by: the chain's own judgement stands
+  const int n = static_cast<int>(std::floor((p.size_max_long - p.size_min_side) / step)) + 1;
+  for (int i = 0; i < n; ++i) {
+    const double v = p.size_min_side + i * step;
+    if (placeEdge(board, id, from, e, v, ch)) f(v, energyGivenStructure(board, id, t));
+  }
+}
+
+// The paper's 8 placements of table `id` (of `from`'s size) with its first touched leg `first`
+// at a corner (eq. 29's smart proposal: the anchor at corner k, the axis at theta or
+// theta + pi/2) that put every touched leg at a corner of its own; for each, the touched legs
+// stand at their corners, the guessed legs take the corners left, and f(turn, k, J given the
+// structure) is called with the board so placed.
+template <typename F>
+void scanPlacements(Blackboard& board, int32_t id, const TableHyp& from, int first,
+                    const Children& ch, const Touched& t, F&& f) {
+  const double r = board.params().cornerLinkRadius();
   const Vec2 anchor = ch.pose[static_cast<size_t>(first)].position();
-  const double r = p.cornerLinkRadius();
-  // Each touched leg moves to its corner of a placement (a contact on a face is explained by a
-  // leg on either side of it: the mirror image's legs stand across its faces), so the contacts
-  // around the touched legs are weighed too.
-  for (int c = 0; c < ch.n; ++c)
-    if (!ch.carried[static_cast<size_t>(c)])
-      board.shapeletsNear(ch.pose[static_cast<size_t>(c)].position(), t.shapelets);
-  // The chain's own placement and the others, apart: their ratio decides a tie below.
-  double log_now = -std::numeric_limits<double>::infinity(), log_others = log_now;
-  // The paper's 8 placements of a table with a given leg at a corner (eq. 29's smart proposal):
-  // the anchor leg at corner k, the table's axis at theta or theta + pi/2.
   for (int turn = 0; turn < 2; ++turn) {
-    const double theta = wrapPi(old.pose.theta + turn * 0.5 * kPi);
+    const double theta = wrapPi(from.pose.theta + turn * 0.5 * kPi);
     for (int k = 0; k < 4; ++k) {
       const Vec2 off = Pose2{0, 0, theta}.toWorld(
-          ModelParams::cornerOffset(k, old.width, old.depth, old.leg));
-      board.reshapeTable(id, {anchor.x() - off.x(), anchor.y() - off.y(), theta}, old.width,
-                         old.depth, old.leg);
+          ModelParams::cornerOffset(k, from.width, from.depth, from.leg));
+      board.reshapeTable(id, {anchor.x() - off.x(), anchor.y() - off.y(), theta}, from.width,
+                         from.depth, from.leg);
       const TableHyp& tab = board.table(id);
       // Every leg that is evidence must stand at a corner, each at its own.
       std::array<bool, 4> taken{};
@@ -150,7 +134,6 @@ double placementCertainty(Blackboard& board, int32_t id) {
         taken[static_cast<size_t>(at)] = true;
       }
       if (!fits) continue;
-      // The touched legs stand at their corners; the guessed legs take the corners left.
       int next = 0;
       for (int c = 0; c < ch.n; ++c) {
         const auto ck = static_cast<size_t>(c);
@@ -164,12 +147,76 @@ double placementCertainty(Blackboard& board, int32_t id) {
         const Vec2 at = tab.corner(next);
         board.moveLeg(ch.id[ck], {at.x(), at.y(), theta});
       }
-      const double j = energyGivenStructure(board, id, t);
-      // The chain's own placement: the anchor at its corner, the axis unturned.
-      if (turn == 0 && k == ch.corner[static_cast<size_t>(first)]) log_now = j;
-      else log_others = logAddExp(log_others, j);
+      f(turn, k, energyGivenStructure(board, id, t));
     }
   }
+}
+
+// Each touched leg moves to its corner of a placement (a contact on a face is explained by a
+// leg on either side of it: the mirror image's legs stand across its faces), so the contacts
+// around the touched legs are weighed too.
+void weighContactsAtTouchedLegs(const Blackboard& board, const Children& ch, Touched& t) {
+  for (int c = 0; c < ch.n; ++c)
+    if (!ch.carried[static_cast<size_t>(c)])
+      board.shapeletsNear(ch.pose[static_cast<size_t>(c)].position(), t.shapelets);
+}
+
+// The first child that is evidence, or -1.
+int firstTouched(const Children& ch) {
+  for (int c = 0; c < ch.n; ++c)
+    if (!ch.carried[static_cast<size_t>(c)]) return c;
+  return -1;
+}
+
+// One index drawn with probability exp(logw[i] - logsumexp(logw)).
+size_t drawIndex(const std::vector<double>& logw, Rng& rng) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (double w : logw) top = std::max(top, w);
+  double total = 0.0;
+  for (double w : logw) total += std::exp(w - top);
+  double u = rng.uniform() * total;
+  for (size_t i = 0; i < logw.size(); ++i) {
+    u -= std::exp(logw[i] - top);
+    if (u < 0.0) return i;
+  }
+  return logw.size() - 1;
+}
+
+}  // namespace
+
+double sizeCertainty(Blackboard& board, int32_t id, double tolerance) {
+  const TableHyp old = board.table(id);
+  Touched t;
+  const Children ch = childrenOf(board, id, t);
+  double certainty = 1.0;
+  for (int e = 0; e < 4; ++e) {
+    const double now = e < 2 ? old.width : old.depth;
+    double log_all = -std::numeric_limits<double>::infinity(), log_near = log_all;
+    scanEdge(board, id, old, e, tolerance / 5.0, ch, t, [&](double v, double j) {
+      log_all = logAddExp(log_all, j);
+      if (std::abs(v - now) <= 0.5 * tolerance) log_near = logAddExp(log_near, j);
+    });
+    if (std::isfinite(log_all)) certainty *= std::exp(log_near - log_all);
+  }
+  restore(board, id, old, ch);
+  return certainty;
+}
+
+double placementCertainty(Blackboard& board, int32_t id) {
+  const TableHyp old = board.table(id);
+  Touched t;
+  const Children ch = childrenOf(board, id, t);
+  const int first = firstTouched(ch);
+  if (first < 0) return 1.0;  // nothing to place it by: the chain's own judgement stands
+  weighContactsAtTouchedLegs(board, ch, t);
+  // The chain's own placement and the others, apart: their ratio decides a tie below.
+  double log_now = -std::numeric_limits<double>::infinity(), log_others = log_now;
+  const int own = ch.corner[static_cast<size_t>(first)];
+  scanPlacements(board, id, old, first, ch, t, [&](int turn, int k, double j) {
+    // The chain's own placement: the anchor at its corner, the axis unturned.
+    if (turn == 0 && k == own) log_now = j;
+    else log_others = logAddExp(log_others, j);
+  });
   restore(board, id, old, ch);
   const double log_all = logAddExp(log_now, log_others);
   if (!std::isfinite(log_all)) return 1.0;
@@ -177,6 +224,51 @@ double placementCertainty(Blackboard& board, int32_t id) {
   // are a tie, not a preference for the chain's: 1/2 exactly.
   if (std::abs(log_now - log_others) < 1e-9 * std::max(1.0, std::abs(log_now))) return 0.5;
   return std::exp(log_now - log_all);
+}
+
+MapTable drawOpenTable(Blackboard& board, int32_t id, double step, Rng& rng) {
+  const ModelParams& p = board.params();
+  const TableHyp old = board.table(id);
+  if (!p.walled()) return modelTable(old.pose, p);
+  Touched t;
+  const Children ch = childrenOf(board, id, t);
+  int touched = 0;
+  for (int c = 0; c < ch.n; ++c) touched += ch.carried[static_cast<size_t>(c)] ? 0 : 1;
+  const int first = firstTouched(ch);
+  // Three touched legs pin the top (and its place); a table no leg pins is the chain's guess.
+  if (touched >= 3 || first < 0) {
+    restore(board, id, old, ch);
+    return p.sized() ? sizedTable(old) : modelTable(old.pose, p);
+  }
+  std::vector<double> logw;
+  MapTable out;
+  if (p.sized()) {
+    // A Gibbs scan: each edge in turn from its conditional given the others as drawn so far.
+    TableHyp cur = old;
+    std::vector<double> values;
+    for (int e = 0; e < 4; ++e) {
+      logw.clear();
+      values.clear();
+      scanEdge(board, id, cur, e, step, ch, t, [&](double v, double j) {
+        values.push_back(v);
+        logw.push_back(j);
+      });
+      if (values.empty()) continue;
+      placeEdge(board, id, cur, e, values[drawIndex(logw, rng)], ch);
+      cur = board.table(id);
+    }
+    out = sizedTable(cur);
+  } else {
+    weighContactsAtTouchedLegs(board, ch, t);
+    std::vector<Pose2> poses;
+    scanPlacements(board, id, old, first, ch, t, [&](int, int, double j) {
+      poses.push_back(board.table(id).pose);
+      logw.push_back(j);
+    });
+    out = modelTable(poses.empty() ? old.pose : poses[drawIndex(logw, rng)], p);
+  }
+  restore(board, id, old, ch);
+  return out;
 }
 
 void identifiedTablesOf(Blackboard& board, double tolerance, std::vector<MapTable>& out) {

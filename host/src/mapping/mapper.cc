@@ -339,8 +339,16 @@ bool Mapper::continueSamples(int n, double beta, int sweeps_between, std::vector
 
 void Mapper::drawOne(std::vector<MapSample>& out) {
   MapSample draw;
-  mapTablesOf(*sample_sampler_, options_.model, draw.tables, sized_tables_);
-  const Blackboard& bb = *sample_board_;
+  Blackboard& bb = *sample_board_;
+  if (options_.model.walled()) {
+    // What the evidence leaves open (an untouched side, a mirror image) drawn from its
+    // conditional: the chain at beta = 1 would repeat one guess in every draw.
+    for (int32_t id = 0; id < bb.tableExtent(); ++id)
+      if (bb.table(id).alive)
+        draw.tables.push_back(drawOpenTable(bb, id, options_.fuse.size / 5.0, sample_rng_));
+  } else {
+    mapTablesOf(*sample_sampler_, options_.model, draw.tables, sized_tables_);
+  }
   for (int32_t id = 0; id < bb.legExtent(); ++id) {
     const LegHyp& l = bb.leg(id);
     if (l.alive && l.parent == kNone) draw.legs.push_back({l.pose, l.side});

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "crunch/blackboard/blackboard.h"
+#include "crunch/core/rng.h"
 #include "crunch/mapping/map.h"
 
 namespace crunch {
@@ -39,6 +40,16 @@ double sizeCertainty(Blackboard& board, int32_t id, double tolerance);
 // the two legs of one side when nothing tells the table's two mirror images apart; 1 when no
 // leg is touched (nothing to place it by). The board is left as it was.
 double placementCertainty(Blackboard& board, int32_t id);
+// A draw of what table `id` leaves open, from the same conditionals the certainties integrate
+// (exploration's posterior draws, Mapper::drawSamples; docs/EXPLORATION.md "Tables the evidence
+// leaves open"): under the rooms model a Gibbs scan of its four edges, each drawn from its
+// conditional given the others as drawn so far (quadrature in steps of `step` over the size
+// prior, guessed legs carried with their corners), under the walls model one of the placements
+// placementCertainty weighs, drawn by its weight. A table with three or more touched legs, or
+// none, is returned as the chain holds it; under the paper's model always. At beta = 1 a chain
+// barely moves between draws (docs/EXPLORATION.md "Posterior draws"), so without this every draw
+// holds the same guess for a table's untouched side. The board is left as it was.
+MapTable drawOpenTable(Blackboard& board, int32_t id, double step, Rng& rng);
 // The map tables of `board`'s live tables the evidence identifies: under the rooms model those
 // whose sizeCertainty is above one half (each of its own size), under the walls model those
 // whose placementCertainty is above one half, under the paper's model all (its figures stay).
