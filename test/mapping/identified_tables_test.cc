@@ -8,6 +8,29 @@
 
 using namespace crunch;
 
+namespace {
+
+// A 0.8 x 0.5 m table (the standard size) at `pose` with a leg at every corner and a contact on
+// the leg at each corner of `touched` (a leg with no contact is the table's guess).
+int32_t tableWithLegs(Blackboard& bb, const Pose2& pose, std::initializer_list<int> touched) {
+  const int32_t id = bb.addTable(pose, 0.8, 0.5, 0.05);
+  for (int c = 0; c < 4; ++c) {
+    const Vec2 at = bb.table(id).corner(c);
+    bb.addLeg({at.x(), at.y(), wrapPeriod(pose.theta, kPi / 2)}, 0.05, id);
+  }
+  for (int c : touched) {
+    const Vec2 at = bb.table(id).corner(c);
+    Shapelet s;
+    s.x = at.x() + 0.025 * std::cos(pose.theta);
+    s.y = at.y() + 0.025 * std::sin(pose.theta);
+    s.oriented = false;
+    bb.pushShapelet(s);
+  }
+  return id;
+}
+
+}  // namespace
+
 TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size, the two legs of one "
           "side leave its depth open and such a table is not reported",
           "[mapping][mapper]") {
@@ -85,24 +108,8 @@ TEST_CASE("placementCertainty: three touched legs place a table of the one size,
   ModelParams p;
   p.objects = ObjectModel::kWalls;
   const Pose2 pose{1.5, 1.5, 0.3};
-  const auto board_with = [&](std::initializer_list<int> touched_corners, Blackboard& bb) {
-    const int32_t id = bb.addTable(pose);
-    for (int c = 0; c < 4; ++c) {
-      const Vec2 at = bb.table(id).corner(c);
-      bb.addLeg({at.x(), at.y(), wrapPeriod(pose.theta, kPi / 2)}, id);
-    }
-    for (int c : touched_corners) {
-      const Vec2 at = bb.table(id).corner(c);
-      Shapelet s;
-      s.x = at.x() + 0.025 * std::cos(pose.theta);
-      s.y = at.y() + 0.025 * std::sin(pose.theta);
-      s.oriented = false;
-      bb.pushShapelet(s);
-    }
-    return id;
-  };
   Blackboard side(p, 8, 64);
-  const int32_t a = board_with({0, 1}, side);  // the +y side's two legs
+  const int32_t a = tableWithLegs(side, pose, {0, 1});  // the +y side's two legs
   const double before = side.totalEnergy();
   const Pose2 leg0 = side.leg(side.table(a).children[0]).pose;
   CHECK(placementCertainty(side, a) == 0.5);
@@ -113,7 +120,7 @@ TEST_CASE("placementCertainty: three touched legs place a table of the one size,
   CHECK(out.empty());
 
   Blackboard three(p, 8, 64);
-  const int32_t b = board_with({0, 1, 2}, three);
+  const int32_t b = tableWithLegs(three, pose, {0, 1, 2});
   CHECK(placementCertainty(three, b) > 0.99);
   identifiedTablesOf(three, 0.10, out);
   CHECK(out.size() == 1);
@@ -130,23 +137,6 @@ TEST_CASE("drawOpenTable: an open side is drawn from its conditional, a mirror t
           "draws, a pinned table is drawn as held, and the board is left as it was",
           "[mapping][mapper]") {
   const Pose2 pose{1.5, 1.5, 0.3};
-  // A 0.8 x 0.5 m table with legs at every corner, contacts at the corners `touched`.
-  const auto board_with = [&](std::initializer_list<int> touched, Blackboard& bb) {
-    const int32_t id = bb.addTable(pose, 0.8, 0.5, 0.05);
-    for (int c = 0; c < 4; ++c) {
-      const Vec2 at = bb.table(id).corner(c);
-      bb.addLeg({at.x(), at.y(), wrapPeriod(pose.theta, kPi / 2)}, 0.05, id);
-    }
-    for (int c : touched) {
-      const Vec2 at = bb.table(id).corner(c);
-      Shapelet s;
-      s.x = at.x() + 0.025 * std::cos(pose.theta);
-      s.y = at.y() + 0.025 * std::sin(pose.theta);
-      s.oriented = false;
-      bb.pushShapelet(s);
-    }
-    return id;
-  };
   Rng rng(17);
 
   // Rooms: the -y side's two legs touched. The width is pinned by them; the depth is open, so
@@ -154,7 +144,7 @@ TEST_CASE("drawOpenTable: an open side is drawn from its conditional, a mirror t
   ModelParams rooms;
   rooms.objects = ObjectModel::kRooms;
   Blackboard open(rooms, 8, 64);
-  const int32_t a = board_with({2, 3}, open);
+  const int32_t a = tableWithLegs(open, pose, {2, 3});
   const double before = open.totalEnergy();
   const Vec2 c2 = open.table(a).corner(2), c3 = open.table(a).corner(3);
   double dmin = 10.0, dmax = 0.0, wmin = 10.0, wmax = 0.0;
@@ -186,7 +176,7 @@ TEST_CASE("drawOpenTable: an open side is drawn from its conditional, a mirror t
 
   // Three touched legs pin the table: every draw is the chain's.
   Blackboard pinned(rooms, 8, 64);
-  const int32_t b = board_with({1, 2, 3}, pinned);
+  const int32_t b = tableWithLegs(pinned, pose, {1, 2, 3});
   for (int i = 0; i < 20; ++i) {
     const MapTable t = drawOpenTable(pinned, b, 0.02, rng);
     CHECK(t.pose.x == pinned.table(b).pose.x);
@@ -199,7 +189,7 @@ TEST_CASE("drawOpenTable: an open side is drawn from its conditional, a mirror t
   ModelParams walls;
   walls.objects = ObjectModel::kWalls;
   Blackboard side(walls, 8, 64);
-  const int32_t s = board_with({0, 1}, side);
+  const int32_t s = tableWithLegs(side, pose, {0, 1});
   const Vec2 centre = side.table(s).pose.position();
   int same = 0, mirrored = 0;
   for (int i = 0; i < 400; ++i) {
