@@ -78,7 +78,10 @@ class Mapper {
   // since the last call join it and it is annealed once (the model's schedule, ending cold);
   // then `n` draws are appended to `out`, each the chain's state after `sweeps_between` sweeps
   // at inverse temperature `beta` (1: the posterior itself, the paper's "hot sampler" of
-  // §2.9). Draws from its own stream (seeded from options.seed), so a run that draws samples
+  // §2.9). A draw holds the chain's tables, its orphan legs (MapSample::legs) and walls; under
+  // the walls and rooms models what each table leaves open (an untouched side, a mirror image)
+  // is drawn from its conditional (drawOpenTable, identified_tables.h), the chain left as it
+  // was. Draws from its own stream (seeded from options.seed), so a run that draws samples
   // maps the same per-pose MAPs as one that does not. No draws (out unchanged) before any
   // shapelet.
   void drawSamples(int n, double beta, int sweeps_between, std::vector<MapSample>& out);
