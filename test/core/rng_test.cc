@@ -38,3 +38,25 @@ TEST_CASE("Rng: streams split by jump() differ and repeat for the same seed", "[
   for (int i = 0; i < 16; ++i) again.jump();
   CHECK(again.state() == stream.state());
 }
+
+TEST_CASE("drawLogWeighted: draws each index in proportion to exp of its log weight", "[core]") {
+  // Log weights far from 0 (the largest is subtracted first) and one impossible index.
+  std::array<double, 4> base = {-1000.0 + std::log(1.0), -1000.0 + std::log(2.0),
+                                -std::numeric_limits<double>::infinity(),
+                                -1000.0 + std::log(5.0)};
+  crunch::Rng rng(21);
+  std::array<int, 4> count{};
+  const int n = 80000;
+  for (int i = 0; i < n; ++i) {
+    std::array<double, 4> w = base;
+    ++count[crunch::drawLogWeighted(w, rng)];
+    CHECK(w[3] == 1.0);  // overwritten: exp(log_w - max)
+  }
+  CHECK(count[2] == 0);
+  // Expected n/8, 2n/8, 5n/8; sd at most ~140: 6 sd.
+  CHECK(std::abs(count[0] - n / 8) < 840);
+  CHECK(std::abs(count[1] - 2 * n / 8) < 840);
+  CHECK(std::abs(count[3] - 5 * n / 8) < 840);
+  std::array<double, 1> one = {3.0};
+  CHECK(crunch::drawLogWeighted(one, rng) == 0);
+}

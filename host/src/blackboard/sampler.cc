@@ -363,7 +363,6 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
   // contact survived a global chain).
   std::array<Vec2, kPointSides> centre;
   std::array<double, kPointSides> log_w;
-  double top = -std::numeric_limits<double>::infinity();
   for (int k = 0; k < kPointSides; ++k) {
     const double turn = kPi * ((k + 0.5) / kPointSides - 0.5);
     const Vec2 dir{away.x() * std::cos(turn) - away.y() * std::sin(turn),
@@ -371,14 +370,8 @@ Pose2 Sampler::legAtPoint(const Shapelet& s, double side) {
     const Vec2 c = Vec2{s.x, s.y} + reach * dir;
     centre[static_cast<size_t>(k)] = c;
     log_w[static_cast<size_t>(k)] = bb_.freeTerm({c.x(), c.y(), theta}, side);
-    top = std::max(top, log_w[static_cast<size_t>(k)]);
   }
-  double total = 0.0;
-  for (double& w : log_w) total += (w = std::exp(w - top));
-  double pick = rng_.uniform() * total;
-  int k = 0;
-  while (k < kPointSides - 1 && (pick -= log_w[static_cast<size_t>(k)]) >= 0.0) ++k;
-  const Vec2 c = centre[static_cast<size_t>(k)] + jitter;
+  const Vec2 c = centre[drawLogWeighted(log_w, rng_)] + jitter;
   return {c.x(), c.y(), theta};
 }
 

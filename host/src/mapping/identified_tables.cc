@@ -168,20 +168,6 @@ int firstTouched(const Children& ch) {
   return -1;
 }
 
-// One index drawn with probability exp(logw[i] - logsumexp(logw)).
-size_t drawIndex(const std::vector<double>& logw, Rng& rng) {
-  double top = -std::numeric_limits<double>::infinity();
-  for (double w : logw) top = std::max(top, w);
-  double total = 0.0;
-  for (double w : logw) total += std::exp(w - top);
-  double u = rng.uniform() * total;
-  for (size_t i = 0; i < logw.size(); ++i) {
-    u -= std::exp(logw[i] - top);
-    if (u < 0.0) return i;
-  }
-  return logw.size() - 1;
-}
-
 }  // namespace
 
 double sizeCertainty(Blackboard& board, int32_t id, double tolerance) {
@@ -237,7 +223,7 @@ MapTable drawOpenTable(Blackboard& board, int32_t id, double step, Rng& rng) {
   const int first = firstTouched(ch);
   // Three touched legs pin the top (and its place); a table no leg pins is the chain's guess.
   if (touched >= 3 || first < 0) {
-    restore(board, id, old, ch);
+    restore(board, id, old, ch);  // as every exit: the board's look-ups keep one order
     return p.sized() ? sizedTable(old) : modelTable(old.pose, p);
   }
   std::vector<double> logw;
@@ -254,7 +240,7 @@ MapTable drawOpenTable(Blackboard& board, int32_t id, double step, Rng& rng) {
         logw.push_back(j);
       });
       if (values.empty()) continue;
-      placeEdge(board, id, cur, e, values[drawIndex(logw, rng)], ch);
+      placeEdge(board, id, cur, e, values[drawLogWeighted(logw, rng)], ch);
       cur = board.table(id);
     }
     out = sizedTable(cur);
@@ -265,7 +251,7 @@ MapTable drawOpenTable(Blackboard& board, int32_t id, double step, Rng& rng) {
       poses.push_back(board.table(id).pose);
       logw.push_back(j);
     });
-    out = modelTable(poses.empty() ? old.pose : poses[drawIndex(logw, rng)], p);
+    out = modelTable(poses.empty() ? old.pose : poses[drawLogWeighted(logw, rng)], p);
   }
   restore(board, id, old, ch);
   return out;

@@ -3,9 +3,12 @@
 // implementation-defined, so a seed gives the same run with any standard library.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <span>
 
 namespace crunch {
 
@@ -92,5 +95,19 @@ class Rng {
   double spare_ = 0.0;
   bool has_spare_ = false;
 };
+
+// An index i drawn with probability exp(log_w[i]) / sum_j exp(log_w[j]) (one uniform draw; the
+// largest weight is subtracted first, so any finite log weights work). `log_w` is overwritten
+// with the unnormalised weights exp(log_w[i] - max). Not empty.
+inline std::size_t drawLogWeighted(std::span<double> log_w, Rng& rng) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (double w : log_w) top = std::max(top, w);
+  double total = 0.0;
+  for (double& w : log_w) total += (w = std::exp(w - top));
+  double pick = rng.uniform() * total;
+  std::size_t k = 0;
+  while (k + 1 < log_w.size() && (pick -= log_w[k]) >= 0.0) ++k;
+  return k;
+}
 
 }  // namespace crunch
