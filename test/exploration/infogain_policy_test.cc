@@ -88,6 +88,39 @@ TEST_CASE("Infogain: rival tables send the robot to touch a disputed leg (Fig. 7
   CHECK(shared.sample_bits == 0.0);
 }
 
+TEST_CASE("Infogain: a goal within the loop's arrival tolerance of the pose just whisked is that "
+          "whisk again", "[exploration][infogain]") {
+  // The driving loop counts a goal reached within its waypoint tolerance and whisks where it
+  // stands. If the draws still disagree there (the whisk settled nothing they dispute), the
+  // same goal would win again and again with the robot never moving.
+  World w;
+  knownRoomWithTouchedLegs(w);
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
+  State s(w, {2.6, 2.6, 0.0});
+  Rng rng(1);
+  for (const double tolerance : {0.0, 0.05}) {
+    InfogainPolicy policy(PolicyOptions{});
+    s.state.arrival_tolerance = tolerance;
+    const Decision d = policy.next(s.state, rng);
+    REQUIRE(d.goal);
+    // Arrived 4 cm short of the goal, at its heading, and whisked there.
+    State there(w, {d.goal->x - 0.04, d.goal->y, d.goal->theta});
+    there.state.whisks = s.state.whisks + 1;
+    there.state.arrival_tolerance = tolerance;
+    const Decision again = policy.next(there.state, rng);
+    REQUIRE(again.goal);
+    const double moved = std::hypot(again.goal->x - d.goal->x, again.goal->y - d.goal->y);
+    INFO("tolerance " << tolerance << ": next goal " << moved << " m from the first");
+    if (tolerance == 0.0) {
+      CHECK(policy.value(there.state, *d.goal).sample_bits == Approx(1.0));
+    } else {
+      CHECK(policy.value(there.state, *d.goal).score == 0.0);
+      CHECK((moved > tolerance ||
+             std::abs(wrapPi(again.goal->theta - d.goal->theta)) > WhiskPredictionOptions{}.amplitude / 2));
+    }
+  }
+}
+
 TEST_CASE("Infogain: draws that agree are worth nothing, a known empty room stops the run",
           "[exploration][infogain]") {
   World w;

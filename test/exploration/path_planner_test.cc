@@ -2,6 +2,7 @@
 #include "crunch/exploration/path_planner.h"
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 
 using namespace crunch;
@@ -105,6 +106,51 @@ TEST_CASE("planPath: a start inside an inflated obstacle leaves it", "[explorati
   const auto plan = planPath(cm, {1.5, 1.5}, {1.5, 0.5});
   REQUIRE(plan);
   CHECK(plan->waypoints.back().y() == Approx(0.5));
+}
+
+TEST_CASE("planPath: a start inside the inflation leaves it without coming nearer the obstacle",
+          "[exploration]") {
+  // A leg just north of the robot, the goal beyond it: the shortest way through the leg's
+  // inflated zone hugs the leg (cells next to it); the way out must first back away from it.
+  KnownSpace k({0, 0}, {3, 3}, 0.05);
+  k.markContact({1.51, 1.61});
+  const Costmap cm(k, PlannerOptions{});
+  const Vec2 start{1.51, 1.46};
+  const double start_clearance = clearance(k, {1.525, 1.475});  // the start cell's centre
+  REQUIRE(start_clearance < PlannerOptions{}.robot_radius);
+  REQUIRE(cm.blocked(start));
+  const auto plan = planPath(cm, start, {1.5, 2.5});
+  REQUIRE(plan);
+  CHECK(plan->waypoints.back().y() == Approx(2.5));
+  // Waypoints inside the inflation are the raw cell path; outside it the robot keeps the full
+  // radius plus margin by construction. Either way none is nearer the leg than the start.
+  for (const Vec2& w : plan->waypoints) CHECK(clearance(k, w) >= start_clearance - 1e-9);
+  // The clearance the costmap keeps is the same distance.
+  int ix, iy;
+  REQUIRE(k.index(start, ix, iy));
+  CHECK(cm.clearance(ix, iy) == Approx(start_clearance).margin(1e-6));
+}
+
+TEST_CASE("planPath: a robot squeezed between a leg and the room's edge leaves by the open side",
+          "[exploration]") {
+  // The l_room pocket (docs/EXPLORATION.md "Leaving the inflation"): a leg to the west, the
+  // region's edge to the east, a wall touched at one point to the north. The goal is north of
+  // the wall; the way is back south, out of the inflation, and round.
+  KnownSpace k({0, 0}, {4, 4}, 0.05);
+  k.markContact({3.61, 2.16});  // the leg
+  k.markContact({3.79, 2.41});  // the wall's bumped point
+  const Costmap cm(k, PlannerOptions{});
+  const Vec2 start{3.81, 2.16};
+  REQUIRE(cm.blocked(start));
+  const auto plan = planPath(cm, start, {3.0, 3.0});
+  REQUIRE(plan);
+  // The first waypoint outside the inflation is south of the start: the robot backs out of the
+  // pocket the way it came in, not through the halos of the leg or the bumped point.
+  const auto out = std::find_if(plan->waypoints.begin(), plan->waypoints.end(),
+                                [&](const Vec2& w) { return !cm.blocked(w); });
+  REQUIRE(out != plan->waypoints.end());
+  CHECK(out->y() < start.y());
+  for (auto w = plan->waypoints.begin(); w != out; ++w) CHECK(w->y() <= start.y() + 1e-9);
 }
 
 TEST_CASE("PlannerOptions: bad values are named", "[exploration]") {

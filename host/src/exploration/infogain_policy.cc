@@ -29,12 +29,13 @@ InfogainPolicy::InfogainPolicy(const PolicyOptions& options, const InfogainOptio
 bool InfogainPolicy::whiskedBefore(const Pose2& pose) const {
   // The same whisk again repeats its outcome at the sensor's resolution: nothing new.
   const double tol = 2.0 * io_.prediction.resolution;
-  for (const Pose2& w : whisked_) {
-    if (std::hypot(w.x - pose.x, w.y - pose.y) <= tol &&
-        std::abs(wrapPi(w.theta - pose.theta)) <= io_.prediction.amplitude / 2)
-      return true;
-  }
-  return false;
+  const auto same = [&](const Pose2& w, double d) {
+    return std::hypot(w.x - pose.x, w.y - pose.y) <= d &&
+           std::abs(wrapPi(w.theta - pose.theta)) <= io_.prediction.amplitude / 2;
+  };
+  // The loop would not move for a goal this close to where it stands: the same whisk again.
+  if (just_whisked_ && same(*just_whisked_, std::max(tol, arrival_tol_))) return true;
+  return std::any_of(whisked_.begin(), whisked_.end(), [&](const Pose2& w) { return same(w, tol); });
 }
 
 void InfogainPolicy::prepare(const ExploreState& state) {
@@ -379,6 +380,10 @@ CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pos
 Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   // The pose just whisked (the robot stands where its last whisk began).
   if (given.whisks > 0) whisked_.push_back(given.robot);
+  just_whisked_.reset();
+  if (given.whisks > whisks_seen_) just_whisked_ = given.robot;
+  whisks_seen_ = given.whisks;
+  arrival_tol_ = given.arrival_tolerance;
   ExploreState state = given;
   if (io_.complete_orphans) {
     completed_.assign(given.samples.begin(), given.samples.end());

@@ -21,7 +21,11 @@ struct Node {
 
 // A* (heuristic on) or Dijkstra (off) from `from` over the costmap. Moves from a free cell into
 // a blocked one are not allowed; moves out of a blocked cell are (a start inside an inflated
-// obstacle leaves it by the cheapest way), but never into an occupied cell. Fills dist and parent; returns the start index or -1.
+// obstacle leaves it by the cheapest way), but never into an occupied cell, and from one blocked
+// cell to another only where the clearance does not fall: without that rule the whole inflated
+// zone joined to the start was open, and a robot squeezed between a leg and a wall planned along
+// the leg's halo and through the wall's untouched stretch, bumping there on every goal (l_room,
+// docs/EXPLORATION.md "Leaving the inflation"). Fills dist and parent; returns the start index or -1.
 int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& dist,
            std::vector<int>& parent) {
   const KnownSpace& k = cm.known();
@@ -71,8 +75,9 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
       const int j = jy * nx + jx;
       const bool there_blocked = flags[j] & 1;
       if (there_blocked && !here_blocked) continue;
-      // Leaving an inflated zone never goes through the obstacle itself.
+      // Leaving an inflated zone never goes through the obstacle itself, nor nearer to it.
       if (flags[j] & 2) continue;
+      if (here_blocked && there_blocked && cm.clearance(jx, jy) < cm.clearance(x, y)) continue;
       // No corner cutting: a diagonal step needs both side cells passable.
       if (d >= 4 && !here_blocked && (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) continue;
       const double step = d >= 4 ? c * std::sqrt(2.0) : c;
@@ -118,6 +123,7 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
   const double c = known.cell();
   blocked_.assign(static_cast<std::size_t>(nx) * ny, 0);
   const double r = options.robot_radius + options.margin;
+  clearance_.assign(blocked_.size(), static_cast<float>(r));
   // Minkowski inflation: a cell is blocked when its centre is within r of an occupied cell's
   // centre, or within r of the region's edge (the robot is told the room's extent: its walls).
   const int k = static_cast<int>(std::ceil(r / c));
@@ -131,13 +137,18 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
     for (int x = 0; x < nx; ++x) {
       const Vec2 p = known.centre(x, y);
       const Vec2 lo = known.lo(), hi = known.hi();
-      if (p.x() - lo.x() < r || hi.x() - p.x() < r || p.y() - lo.y() < r || hi.y() - p.y() < r) {
+      const double edge = std::min({p.x() - lo.x(), hi.x() - p.x(), p.y() - lo.y(), hi.y() - p.y()});
+      if (edge < r) {
         blocked_[y * nx + x] = 1;
+        clearance_[y * nx + x] = std::min(clearance_[y * nx + x], static_cast<float>(edge));
       }
       if (known.at(x, y) != KnownSpace::Cell::kOccupied) continue;
       for (const auto& [dx, dy] : disc) {
         const int jx = x + dx, jy = y + dy;
-        if (jx >= 0 && jy >= 0 && jx < nx && jy < ny) blocked_[jy * nx + jx] = 1;
+        if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
+        blocked_[jy * nx + jx] = 1;
+        float& cl = clearance_[jy * nx + jx];
+        cl = std::min(cl, static_cast<float>(std::hypot(dx * c, dy * c)));
       }
     }
   }
@@ -146,6 +157,11 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
 bool Costmap::blocked(int ix, int iy) const {
   if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return true;
   return blocked_[iy * known_.nx() + ix] != 0;
+}
+
+double Costmap::clearance(int ix, int iy) const {
+  if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return 0.0;
+  return clearance_[iy * known_.nx() + ix];
 }
 
 bool Costmap::blocked(const Vec2& p) const {

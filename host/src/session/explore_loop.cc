@@ -167,7 +167,7 @@ Status ExploreLoop::decideAndPlan() {
   double ms = 0.0;
   const exploration::Decision d = exploration::decide(
       policy_, known_, options_.explore.planner, last_pose_, samples_, mounts_, model_, grid_,
-      report_.whisks, report_.travel_m, false, rng_, &ms);
+      report_.whisks, report_.travel_m, false, options_.waypoint_tolerance, rng_, &ms);
   decision_total_ms_ += ms;
   ++decisions_;
   report_.decision_ms_max = std::max(report_.decision_ms_max, ms);

@@ -68,13 +68,14 @@ struct ExplorationReport {
   std::vector<Vec2> bump_points;  // where the bumper hit
 };
 
-// One decision: the costmap over `known`, the distance field from the robot, then the policy.
+// One decision: the costmap over `known`, the distance field from the robot, then the policy
+// (ExploreState says what each argument means).
 // `decision_ms` receives the wall time of the whole (costmap, field, policy), milliseconds.
 Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOptions& planner,
                 const Pose2& robot, std::span<const MapSample> samples,
                 const std::vector<WhiskerMount>& mounts, const ModelParams& model,
                 std::span<const Pose2> grid_poses, int whisks, double travel_m, bool teleport,
-                Rng& rng, double* decision_ms);
+                double arrival_tolerance, Rng& rng, double* decision_ms);
 
 // The command line's --explore POLICY [--travel-budget M] [--whisk-budget N], shared by --sim and
 // --robot (each adds its own flags): nullopt without a policy; an Error naming the flag for an

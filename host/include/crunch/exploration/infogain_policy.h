@@ -35,7 +35,10 @@
 // score(c) = I(Y; M) / (travel(c) + whisk_cost_m), travel from the DistanceField. The whisk
 // itself costs time (8 s: pi/12 each way at pi/24 rad/s, and back), counted as the metres the
 // base would drive in that time. A pose already whisked (within resolution-sized tolerance)
-// would repeat its outcome exactly and scores 0. Stops ("no candidate worth its travel") when
+// would repeat its outcome exactly and scores 0; so does a candidate within the driving loop's
+// arrival tolerance (ExploreState::arrival_tolerance) of the pose just whisked, at its heading:
+// the loop counts it reached where the robot stands and whisks there again (one l_room run
+// whisked one spot 30 times over). Stops ("no candidate worth its travel") when
 // the best score is at most PolicyOptions::min_bits_per_metre.
 //
 // Candidates: a lattice over the costmap's free cells (candidate_spacing, candidate_headings)
@@ -47,6 +50,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -149,6 +153,11 @@ class InfogainPolicy final : public ExplorePolicy {
   double rmin_ = 0.0, rmax_ = 0.0;  // the whiskers' bases and tips from the centre (prepare)
   double lambda_ = 1.0;
   std::vector<Pose2> whisked_;
+  // The pose whisked since the last decision (where the robot stands), and the loop's arrival
+  // tolerance (ExploreState::arrival_tolerance): a candidate within it is that whisk again.
+  std::optional<Pose2> just_whisked_;
+  double arrival_tol_ = 0.0;
+  int whisks_seen_ = 0;
   std::vector<MapSample> completed_;  // next(): the state's draws with their orphans completed
   std::vector<CandidateValue> values_;
 };

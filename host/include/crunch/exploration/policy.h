@@ -53,6 +53,10 @@ struct ExploreState {
   // --teleport: the robot jumps to the goal (the paper's idealisation), so a goal need not be
   // reachable by a path; the grid policy then visits every pose of the list, as the paper did.
   bool teleport = false;
+  // Metres from a goal within which the driving loop counts it reached and whisks where it
+  // stands (ExploreLoop::Options::waypoint_tolerance; 0 teleporting): a candidate that close to
+  // the pose just whisked, at its heading, is that whisk again.
+  double arrival_tolerance = 0.0;
 };
 
 struct Decision {
