@@ -391,6 +391,43 @@ TEST_CASE("Sampler: hundreds of shapelets in one spot give a valid, bounded MAP"
   for (const Pose2& t : map) CHECK((std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.theta)));
 }
 
+TEST_CASE("Blackboard: a leg whisked a hundred times over: every move's blanket holds all its "
+          "shapelets, and one too large to hold is refused", "[blackboard]") {
+  // A driven robot that whisks one leg again and again puts more shapelets within the leg's link
+  // radius than a blanket of 64 held; the moves then evaluated part of their blanket and the
+  // audit saw changes that were not the brute force's.
+  ModelParams p;
+  const Pose2 leg{2, 2, 0};
+  for (const int n : {150, kMaxBlanketShapelets + 40}) {
+    Blackboard bb(p, 2 * n, 256);
+    Rng noise(9);
+    for (int i = 0; i < n; ++i)
+      bb.pushShapelet(MakeShapelet(leg, p.leg_side, i % 4, noise.uniform(-0.02, 0.02)));
+    ShapeletSet near;
+    bb.shapeletsNear(leg.position(), near);
+    Rng rng(4);
+    Sampler sampler(bb, {}, rng);
+    sampler.setAudit(true);
+    for (double beta : {0.3, 1.0, 5.0}) sampler.sweep(beta);
+    INFO(n << " shapelets on the leg");
+    if (n <= kMaxBlanketShapelets) {
+      CHECK(near.n == n);
+      CHECK_FALSE(near.overflowed);
+      CHECK(bb.blanketOverflows() == 0);
+      CHECK(bb.liveLegs() > 0);  // the leg is found
+      CHECK(sampler.stats().audit_max_error < 1e-9);
+      CHECK(sampler.stats().audit_cache_max_error < 1e-9);
+    } else {
+      CHECK(near.n == kMaxBlanketShapelets);
+      CHECK(near.overflowed);
+      // Every move at the leg is refused, none is evaluated on part of its blanket.
+      CHECK(bb.blanketOverflows() > 0);
+      CHECK(bb.liveLegs() == 0);
+      CHECK(sampler.stats().audit_max_error < 1e-9);
+    }
+  }
+}
+
 TEST_CASE("Sampler: pruning removes hypotheses whose shapelets left working memory",
           "[blackboard]") {
   ModelParams p;

@@ -88,11 +88,11 @@ TEST_CASE("Infogain: rival tables send the robot to touch a disputed leg (Fig. 7
   CHECK(shared.sample_bits == 0.0);
 }
 
-TEST_CASE("Infogain: a goal within the loop's arrival tolerance of the pose just whisked is that "
-          "whisk again", "[exploration][infogain]") {
+TEST_CASE("Infogain: the goal whisked, and a pose within the loop's arrival tolerance of where "
+          "it whisked, are that whisk again", "[exploration][infogain]") {
   // The driving loop counts a goal reached within its waypoint tolerance and whisks where it
   // stands. If the draws still disagree there (the whisk settled nothing they dispute), the
-  // same goal would win again and again with the robot never moving.
+  // same goal, or one beside the robot, would win again and again with the robot never moving.
   World w;
   knownRoomWithTouchedLegs(w);
   for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
@@ -103,20 +103,29 @@ TEST_CASE("Infogain: a goal within the loop's arrival tolerance of the pose just
     s.state.arrival_tolerance = tolerance;
     const Decision d = policy.next(s.state, rng);
     REQUIRE(d.goal);
+    CHECK(policy.value(s.state, *d.goal).sample_bits == Approx(1.0));
     // Arrived 4 cm short of the goal, at its heading, and whisked there.
-    State there(w, {d.goal->x - 0.04, d.goal->y, d.goal->theta});
+    const Pose2 at{d.goal->x - 0.04, d.goal->y, d.goal->theta};
+    State there(w, at);
     there.state.whisks = s.state.whisks + 1;
     there.state.arrival_tolerance = tolerance;
     const Decision again = policy.next(there.state, rng);
     REQUIRE(again.goal);
-    const double moved = std::hypot(again.goal->x - d.goal->x, again.goal->y - d.goal->y);
-    INFO("tolerance " << tolerance << ": next goal " << moved << " m from the first");
+    INFO("tolerance " << tolerance << ": next goal (" << again.goal->x << ", " << again.goal->y
+                      << ", " << again.goal->theta << ")");
+    // The goal itself has been whisked, whatever the tolerance.
+    CHECK(policy.value(there.state, *d.goal).score == 0.0);
+    CHECK_FALSE((again.goal->x == d.goal->x && again.goal->y == d.goal->y &&
+                 again.goal->theta == d.goal->theta));
+    // 3 cm from where the robot stands (7 cm from the goal), at its heading: the loop would
+    // not move for it.
+    const Pose2 beside{at.x - 0.03, at.y, at.theta};
     if (tolerance == 0.0) {
-      CHECK(policy.value(there.state, *d.goal).sample_bits == Approx(1.0));
+      CHECK(policy.value(there.state, beside).sample_bits > 0.0);
     } else {
-      CHECK(policy.value(there.state, *d.goal).score == 0.0);
-      CHECK((moved > tolerance ||
-             std::abs(wrapPi(again.goal->theta - d.goal->theta)) > WhiskPredictionOptions{}.amplitude / 2));
+      CHECK(policy.value(there.state, beside).score == 0.0);
+      CHECK((std::hypot(again.goal->x - at.x, again.goal->y - at.y) > tolerance ||
+             std::abs(wrapPi(again.goal->theta - at.theta)) > WhiskPredictionOptions{}.amplitude / 2));
     }
   }
 }

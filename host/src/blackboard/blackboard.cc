@@ -53,7 +53,7 @@ Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t res
       slot_gen_(static_cast<size_t>(working_memory), 0) {
   assert(working_memory > 0);
   // A move's shapelets: its Touched set and, for a wall's move, up to every slot besides.
-  kept_slots_.reserve(static_cast<size_t>(working_memory) + 64);
+  kept_slots_.reserve(static_cast<size_t>(working_memory) + kMaxBlanketShapelets);
 }
 
 // ---------------------------------------------------------------- working memory
@@ -87,7 +87,7 @@ void Blackboard::clearShapelets() {
   wm_points_ = 0;
 }
 
-void Blackboard::shapeletsNear(const Vec2& p, IdSet<64>& out) const {
+void Blackboard::shapeletsNear(const Vec2& p, ShapeletSet& out) const {
   const double r = shapelet_link_r_;
   shapelet_hash_.query(p, r, [&](int32_t slot) {
     const Shapelet& s = wm_[static_cast<size_t>(slot)];
@@ -635,6 +635,10 @@ double Blackboard::cachedShapeletTerm(int slot) {
 }
 
 double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more) {
+  if (t.shapelets.overflowed) {
+    ++blanket_overflows_;
+    return std::numeric_limits<double>::infinity();
+  }
   if (!incremental_) return localEnergy(t, more);
   if (free_ && free_->rays() != rays_seen_) {  // new negative evidence: every own term changed
     rays_seen_ = free_->rays();
@@ -657,6 +661,7 @@ double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more)
 double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) {
   n_kept_tables_ = n_kept_legs_ = 0;
   kept_slots_.clear();
+  if (t.shapelets.overflowed) return -std::numeric_limits<double>::infinity();
   if (!incremental_) return localEnergy(t, more);
   double e = 0.0;
   for (int32_t id : t.tables.span()) {

@@ -223,7 +223,7 @@ bool Sampler::decide(double delta, double beta) {
   // Under kReversibleJump the sweep calls decide() only from symmetric proposals (jitterWall,
   // extendWall): Metropolis-Hastings with a log q ratio of 0.
   if (rj()) return decideRj(delta, beta, 0.0);
-  if (audit_) {
+  if (audit_ && std::isfinite(delta)) {  // -infinity: refused by a constraint, nothing to audit
     const double err = std::abs((bb_.totalEnergy() - audit_before_) - delta);
     stats_.audit_max_error = std::max(stats_.audit_max_error, err);
   }
@@ -307,7 +307,7 @@ Pose2 Sampler::legOnFace(const Shapelet& s, double side) {
   // the face.
   int partner = -1;
   if (opt_.smart_parent) {
-    IdSet<64> near;
+    ShapeletSet near;
     bb_.shapeletsNear({s.x, s.y}, near);
     for (int32_t o : near.span()) {
       const Shapelet& so = bb_.shapelet(o);
@@ -488,7 +488,7 @@ bool Sampler::pointNear(const Vec2& c, double radius) const {
 bool Sampler::pointSupported(const Vec2& c) const {
   // Shapelets within the link radius of c (shapeletsNear), none of them oriented: a leg that only point contacts support, whose
   // orientation nothing but its table constrains.
-  IdSet<64> near;
+  ShapeletSet near;
   bb_.shapeletsNear(c, near);
   bool any = false;
   for (int32_t o : near.span()) {
@@ -814,7 +814,7 @@ void Sampler::killEmptied(const IdSet<8>& tables, IdSet<8>& emptied) {
 }
 
 bool Sampler::legDirectlyLinked(int32_t leg) const {
-  IdSet<64> near;
+  ShapeletSet near;
   bb_.shapeletsNear(bb_.leg(leg).pose.position(), near);
   return near.n > 0;
 }
@@ -919,7 +919,7 @@ void Sampler::enterReversibleSpace() {
 }
 
 bool Sampler::decideRj(double delta, double beta, double log_q_ratio) {
-  if (audit_) {
+  if (audit_ && std::isfinite(delta)) {  // -infinity: refused by a constraint, nothing to audit
     const double err = std::abs((bb_.totalEnergy() - audit_before_) - delta);
     stats_.audit_max_error = std::max(stats_.audit_max_error, err);
   }

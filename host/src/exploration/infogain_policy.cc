@@ -381,7 +381,12 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   // The pose just whisked (the robot stands where its last whisk began).
   if (given.whisks > 0) whisked_.push_back(given.robot);
   just_whisked_.reset();
-  if (given.whisks > whisks_seen_) just_whisked_ = given.robot;
+  if (given.whisks > whisks_seen_) {
+    just_whisked_ = given.robot;
+    // The last goal was whisked at, within the loop's tolerance of it (or, rarely, a touch on
+    // the way was whisked and the goal then given up: it is dropped all the same).
+    if (last_goal_) whisked_.push_back(*last_goal_);
+  }
   whisks_seen_ = given.whisks;
   arrival_tol_ = given.arrival_tolerance;
   ExploreState state = given;
@@ -494,6 +499,7 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   }
   d.goal = b.pose;
   d.score = b.score;
+  last_goal_ = d.goal;
   return d;
 }
 

@@ -13,19 +13,28 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
 constexpr int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 
+// Ordered by metres inside the inflation first, then by cost plus heuristic (lexicographic).
 struct Node {
+  double inside;
   double f;
   int index;
-  bool operator>(const Node& o) const { return f > o.f || (f == o.f && index > o.index); }
+  bool operator>(const Node& o) const {
+    if (inside != o.inside) return inside > o.inside;
+    return f > o.f || (f == o.f && index > o.index);
+  }
 };
 
 // A* (heuristic on) or Dijkstra (off) from `from` over the costmap. Moves from a free cell into
 // a blocked one are not allowed; moves out of a blocked cell are (a start inside an inflated
-// obstacle leaves it by the cheapest way), but never into an occupied cell, and from one blocked
-// cell to another only where the clearance does not fall: without that rule the whole inflated
-// zone joined to the start was open, and a robot squeezed between a leg and a wall planned along
-// the leg's halo and through the wall's untouched stretch, bumping there on every goal (l_room,
-// docs/EXPLORATION.md "Leaving the inflation"). Fills dist and parent; returns the start index or -1.
+// obstacle leaves it), but never into an occupied cell. Paths are compared lexicographically:
+// fewest metres driven inside the inflation first, then least cost. So a start inside leaves
+// the inflation by its shortest way out and plans from there; by cost alone the whole zone
+// joined to the start was a free corridor, and a robot squeezed between a leg and a wall
+// planned along the leg's halo and through the wall's untouched stretch, bumping there on every
+// goal (l_room, docs/EXPLORATION.md "Leaving the inflation"). The first key is 0 from the first
+// free cell on, so this changes nothing for a start outside. dist holds the cost alone (the
+// heuristic is on it; 0 is the first key's, consistent as any constant is). Fills dist and
+// parent; returns the start index or -1.
 int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& dist,
            std::vector<int>& parent) {
   const KnownSpace& k = cm.known();
@@ -59,14 +68,19 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
   const auto blockedAt = [&](int x, int y) {
     return x < 0 || y < 0 || x >= nx || y >= ny || (flags[y * nx + x] & 1);
   };
+  std::vector<double> inside(n_cells, kInf);  // metres driven inside the inflation
   std::priority_queue<Node, std::vector<Node>, std::greater<Node>> open;
   dist[start] = 0.0;
-  open.push({h(sx, sy), start});
+  inside[start] = 0.0;
+  open.push({0.0, h(sx, sy), start});
   while (!open.empty()) {
     const Node n = open.top();
     open.pop();
     const int x = n.index % nx, y = n.index / nx;
-    if (n.f > dist[n.index] + h(x, y) + 1e-12) continue;  // stale entry
+    if (n.inside > inside[n.index] || (n.inside == inside[n.index] &&
+                                       n.f > dist[n.index] + h(x, y) + 1e-12)) {
+      continue;  // stale entry
+    }
     if (n.index == goal) break;
     const bool here_blocked = flags[n.index] & 1;
     for (int d = 0; d < 8; ++d) {
@@ -75,17 +89,18 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
       const int j = jy * nx + jx;
       const bool there_blocked = flags[j] & 1;
       if (there_blocked && !here_blocked) continue;
-      // Leaving an inflated zone never goes through the obstacle itself, nor nearer to it.
+      // Leaving an inflated zone never goes through the obstacle itself.
       if (flags[j] & 2) continue;
-      if (here_blocked && there_blocked && cm.clearance(jx, jy) < cm.clearance(x, y)) continue;
       // No corner cutting: a diagonal step needs both side cells passable.
       if (d >= 4 && !here_blocked && (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) continue;
       const double step = d >= 4 ? c * std::sqrt(2.0) : c;
       const double nd = dist[n.index] + 0.5 * step * (double(rate[n.index]) + double(rate[j]));
-      if (nd < dist[j]) {
+      const double ni = inside[n.index] + (here_blocked ? step : 0.0);
+      if (ni < inside[j] || (ni == inside[j] && nd < dist[j])) {
+        inside[j] = ni;
         dist[j] = nd;
         parent[j] = n.index;
-        open.push({nd + h(jx, jy), j});
+        open.push({ni, nd + h(jx, jy), j});
       }
     }
   }
@@ -123,7 +138,7 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
   const double c = known.cell();
   blocked_.assign(static_cast<std::size_t>(nx) * ny, 0);
   const double r = options.robot_radius + options.margin;
-  clearance_.assign(blocked_.size(), static_cast<float>(r));
+
   // Minkowski inflation: a cell is blocked when its centre is within r of an occupied cell's
   // centre, or within r of the region's edge (the robot is told the room's extent: its walls).
   const int k = static_cast<int>(std::ceil(r / c));
@@ -137,18 +152,13 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
     for (int x = 0; x < nx; ++x) {
       const Vec2 p = known.centre(x, y);
       const Vec2 lo = known.lo(), hi = known.hi();
-      const double edge = std::min({p.x() - lo.x(), hi.x() - p.x(), p.y() - lo.y(), hi.y() - p.y()});
-      if (edge < r) {
+      if (p.x() - lo.x() < r || hi.x() - p.x() < r || p.y() - lo.y() < r || hi.y() - p.y() < r) {
         blocked_[y * nx + x] = 1;
-        clearance_[y * nx + x] = std::min(clearance_[y * nx + x], static_cast<float>(edge));
       }
       if (known.at(x, y) != KnownSpace::Cell::kOccupied) continue;
       for (const auto& [dx, dy] : disc) {
         const int jx = x + dx, jy = y + dy;
-        if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
-        blocked_[jy * nx + jx] = 1;
-        float& cl = clearance_[jy * nx + jx];
-        cl = std::min(cl, static_cast<float>(std::hypot(dx * c, dy * c)));
+        if (jx >= 0 && jy >= 0 && jx < nx && jy < ny) blocked_[jy * nx + jx] = 1;
       }
     }
   }
@@ -157,11 +167,6 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
 bool Costmap::blocked(int ix, int iy) const {
   if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return true;
   return blocked_[iy * known_.nx() + ix] != 0;
-}
-
-double Costmap::clearance(int ix, int iy) const {
-  if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return 0.0;
-  return clearance_[iy * known_.nx() + ix];
 }
 
 bool Costmap::blocked(const Vec2& p) const {

@@ -14,7 +14,7 @@ namespace {
 // stands. A leg that explains none is its table's guess and goes with its corner.
 bool explainsContact(const Blackboard& board, const LegHyp& l) {
   const ModelParams& p = board.params();
-  IdSet<64> near;
+  ShapeletSet near;
   board.shapeletsNear(l.pose.position(), near);
   for (int32_t s : near.span())
     if (logShapeletKernel(l, board.shapelet(s), p) > std::log(p.c_S)) return true;

@@ -52,14 +52,17 @@
 
 namespace crunch {
 
-// A small set of ids with fixed capacity (a move touches a handful of hypotheses).
+// A small set of ids with fixed capacity (a move touches a handful of hypotheses). An id
+// past the capacity is not held and sets `overflowed`.
 template <int N>
 struct IdSet {
   int32_t ids[N];
   int n = 0;
+  bool overflowed = false;
   void add(int32_t id) {
     if (id == kNone || contains(id)) return;
     if (n < N) ids[n++] = id;
+    else overflowed = true;
   }
   bool contains(int32_t id) const {
     for (int i = 0; i < n; ++i)
@@ -69,11 +72,18 @@ struct IdSet {
   std::span<const int32_t> span() const { return {ids, static_cast<size_t>(n)}; }
 };
 
+// The most shapelets a move's Markov blanket holds (Touched::shapelets). A driven robot that
+// whisks one leg over and over puts a hundred and more within a leg's link radius (docs/
+// BLACKBOARD.md "A blanket too large to hold"); a move whose blanket holds more is refused
+// (Blackboard::energyBefore), never evaluated on part of it.
+inline constexpr int kMaxBlanketShapelets = 256;
+using ShapeletSet = IdSet<kMaxBlanketShapelets>;
+
 // What a move touches: tables, legs, walls, and working-memory slots of shapelets.
 struct Touched {
   IdSet<8> tables;
   IdSet<4 * kMaxChildren> legs;
-  IdSet<64> shapelets;
+  ShapeletSet shapelets;
   IdSet<4> walls;
 };
 
@@ -110,7 +120,7 @@ class Blackboard {
   bool slotUsed(int slot) const { return wm_used_[static_cast<size_t>(slot)]; }
   const Shapelet& shapelet(int slot) const { return wm_[static_cast<size_t>(slot)]; }
   // Adds to `out` the slots of shapelets a leg at `p` could cause (eq. 30).
-  void shapeletsNear(const Vec2& p, IdSet<64>& out) const;
+  void shapeletsNear(const Vec2& p, ShapeletSet& out) const;
 
   // ---- Hypotheses ----
   // Adds a table of the paper's one size (ModelParams::table_width ...).
@@ -215,10 +225,16 @@ class Blackboard {
   void beginSweep() { in_sweep_ = true; }
   void endSweep() { in_sweep_ = false; }
   // localEnergy(t, more) of the state now, from the cache where it holds the term (computing and
-  // caching it where not). Without incremental energies, localEnergy itself.
+  // caching it where not). Without incremental energies, localEnergy itself. A blanket whose
+  // shapelets overflowed (t.shapelets.overflowed: more than kMaxBlanketShapelets) is +infinity
+  // here and -infinity in energyAfter, so the move's change is -infinity and it is refused in
+  // every acceptance (a birth and its death, a move and its reverse, have the same blanket, so
+  // the refusal is symmetric); counted in blanketOverflows().
   double energyBefore(const Touched& t, std::span<const int32_t> more = {});
   // localEnergy(t, more) afresh; the own and shapelet terms are kept for acceptMove().
   double energyAfter(const Touched& t, std::span<const int32_t> more = {});
+  // Moves refused because their blanket held more shapelets than kMaxBlanketShapelets.
+  long long blanketOverflows() const { return blanket_overflows_; }
   // The state of the last energyAfter() is kept: its terms become the cache.
   void acceptMove();
   // Off: energyBefore() and energyAfter() are localEnergy() (the reference path, both sides of
@@ -326,6 +342,7 @@ class Blackboard {
   std::array<Kept, 8> kept_tables_;
   std::array<Kept, 4 * kMaxChildren> kept_legs_;
   int n_kept_tables_ = 0, n_kept_legs_ = 0;
+  long long blanket_overflows_ = 0;
   std::vector<Kept> kept_slots_;
 };
 

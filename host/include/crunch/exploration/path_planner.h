@@ -5,9 +5,9 @@
 // plan optimistically, replan when a bump or a contact says otherwise) at a cost factor > 1, so
 // known free space is preferred. The path is shortened by line-of-sight over the inflated grid.
 // A start inside the inflation (the robot stands closer to an obstacle than planned: after a
-// bump, or squeezed through a gap the margin closes) leaves it along non-decreasing clearance:
-// inside the inflated zone a step may never bring the robot nearer its nearest obstacle, so the
-// way out is away from what it stands by, never a slide through the zone to wherever is cheapest.
+// bump, or squeezed through a gap the margin closes) leaves it by its shortest way out: paths
+// are compared by the metres they drive inside the inflation first, then by cost, so the zone
+// is an exit, never a corridor to wherever is cheapest.
 //
 // DistanceField is the same search run as Dijkstra from the robot to every cell (one search per
 // decision), so a policy scores hundreds of candidate poses by their path length at the cost of
@@ -43,10 +43,6 @@ class Costmap {
   Costmap(const KnownSpace& known, const PlannerOptions& options);
   bool blocked(int ix, int iy) const;  // true outside the grid
   bool blocked(const Vec2& p) const;
-  // Metres from the cell's centre to the nearest occupied cell's centre or the region's edge,
-  // where that is below robot_radius + margin (the cell is blocked); robot_radius + margin for
-  // every other cell. Outside the grid: 0.
-  double clearance(int ix, int iy) const;
   const KnownSpace& known() const { return known_; }
   const PlannerOptions& options() const { return options_; }
 
@@ -54,7 +50,6 @@ class Costmap {
   const KnownSpace& known_;
   PlannerOptions options_;
   std::vector<std::uint8_t> blocked_;
-  std::vector<float> clearance_;
 };
 
 struct PathPlan {
@@ -66,9 +61,9 @@ struct PathPlan {
 };
 
 // The shortest path from `from` to `to` on the costmap, or nullopt when the goal is blocked or
-// unreachable. A start inside an inflated obstacle (after a bump) may leave it by the shortest
-// way out that crosses no occupied cell and whose clearance (Costmap::clearance) never falls
-// while it is inside the inflation.
+// unreachable. A start inside an inflated obstacle (after a bump) leaves it by the shortest way
+// out that crosses no occupied cell (of the paths with the fewest metres inside the inflation,
+// the cheapest).
 std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const Vec2& to);
 
 // Path cost from one start to every cell (Dijkstra on the same graph as planPath).
