@@ -168,6 +168,39 @@ TEST_CASE("planPath: a start where every step out first comes nearer an obstacle
   CHECK(plan->waypoints.back().y() == Approx(0.5));
 }
 
+TEST_CASE("Costmap: where the robot has been it fits, unless it bumped there", "[exploration]") {
+  // A 0.45 m chair whose legs were found after the robot drove under it (chairs_at_table seed 2):
+  // the inflation closes its 0.415 m gaps, and the robot under it stands on free cells a search
+  // may not leave. The way it came in stays passable.
+  KnownSpace k({0, 0}, {3, 3}, 0.05);
+  const Vec2 chair{1.51, 1.51};
+  // Contacts on the legs' inner faces, 0.36 m apart across each gap.
+  for (const Vec2& corner : {Vec2{1, 1}, Vec2{1, -1}, Vec2{-1, 1}, Vec2{-1, -1}})
+    k.markContact(chair + 0.18 * corner);
+  const Vec2 outside{1.51, 0.6};
+  {
+    const Costmap cm(k, PlannerOptions{});
+    REQUIRE_FALSE(cm.blocked(chair));
+    REQUIRE(cm.blocked(Vec2{1.51, 1.51 - 0.18}));  // the gap between the two south legs
+    CHECK_FALSE(planPath(cm, chair, outside));       // an island
+  }
+  k.markVisited(outside, chair);  // it drove in from the south
+  {
+    const Costmap cm(k, PlannerOptions{});
+    CHECK_FALSE(cm.blocked(Vec2{1.51, 1.51 - 0.18}));
+    const auto plan = planPath(cm, chair, outside);
+    REQUIRE(plan);
+    CHECK(plan->waypoints.back().y() == Approx(0.6));
+    // The other gaps stay closed: only the trail opens.
+    CHECK(cm.blocked(Vec2{1.51 + 0.18, 1.51}));
+  }
+  // A bump beside the trail: the rim touched there, so the trail near it closes again.
+  k.markBump({1.51 + 0.1, 1.51 - 0.18});
+  const Costmap cm(k, PlannerOptions{});
+  CHECK(cm.blocked(Vec2{1.51, 1.51 - 0.18}));
+  CHECK_FALSE(planPath(cm, chair, outside));
+}
+
 TEST_CASE("PlannerOptions: bad values are named", "[exploration]") {
   PlannerOptions o;
   CHECK(o.validate());

@@ -24,6 +24,8 @@ KnownSpace::KnownSpace(const Vec2& lo, const Vec2& hi, double cell) : lo_(lo), c
   swept_.assign(n, 0);
   touched_.assign(n, 0);
   mapped_.assign(n, 0);
+  visited_.assign(n, 0);
+  bumped_.assign(n, 0);
 }
 
 bool KnownSpace::index(const Vec2& p, int& ix, int& iy) const {
@@ -70,6 +72,30 @@ void KnownSpace::markBody(const Vec2& position, double radius) {
 void KnownSpace::markContact(const Vec2& point) {
   int ix, iy;
   if (index(point, ix, iy)) touched_[iy * nx_ + ix] = 1;
+}
+
+void KnownSpace::markBump(const Vec2& point) {
+  int ix, iy;
+  if (!index(point, ix, iy)) return;
+  touched_[iy * nx_ + ix] = 1;
+  bumped_[iy * nx_ + ix] = 1;
+}
+
+void KnownSpace::markVisited(const Vec2& a, const Vec2& b) {
+  if (!a.allFinite() || !b.allFinite()) return;
+  const Vec2 d = b - a;
+  const int n = static_cast<int>(std::ceil(d.norm() / (0.25 * cell_))) + 1;
+  int ix, iy;
+  for (int k = 0; k <= n; ++k)
+    if (index(a + d * (static_cast<double>(k) / n), ix, iy)) visited_[iy * nx_ + ix] = 1;
+}
+
+bool KnownSpace::visited(int ix, int iy) const {
+  return ix >= 0 && iy >= 0 && ix < nx_ && iy < ny_ && visited_[iy * nx_ + ix];
+}
+
+bool KnownSpace::bumped(int ix, int iy) const {
+  return ix >= 0 && iy >= 0 && ix < nx_ && iy < ny_ && bumped_[iy * nx_ + ix];
 }
 
 void KnownSpace::setMapObstacles(std::span<const MapTable> tables, std::span<const MapWall> walls) {

@@ -24,26 +24,45 @@ struct Node {
   }
 };
 
-// A* (heuristic on) or Dijkstra (off) from `from` over the costmap. Moves from a free cell into
-// a blocked one are not allowed; moves out of a blocked cell are (a start inside an inflated
-// obstacle leaves it), but never into an occupied cell. Paths are compared lexicographically:
-// fewest metres driven inside the inflation first, then least cost. So a start inside leaves
-// the inflation by its shortest way out and plans from there; by cost alone the whole zone
-// joined to the start was a free corridor, and a robot squeezed between a leg and a wall
-// planned along the leg's halo and through the wall's untouched stretch, bumping there on every
-// goal (l_room, docs/EXPLORATION.md "Leaving the inflation"). The first key is 0 from the first
-// free cell on, so this changes nothing for a start outside. dist holds the cost alone (the
-// heuristic is on it; 0 is the first key's, consistent as any constant is). Fills dist and
-// parent; returns the start index or -1.
-int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& dist,
-           std::vector<int>& parent) {
+// A* (heuristic on) or Dijkstra (off) from `from` over the costmap, on states (cell, phase).
+// A start inside the inflation (Costmap::inflated) begins escaping: it may step into any cell
+// that is not occupied, and is out once it reaches a cell the inflation does not cover. From
+// then on, and from a start outside, only passable cells (not Costmap::blocked) may be
+// entered. Paths are compared lexicographically: fewest metres driven out of blocked cells
+// first, then least cost. So a start inside leaves by its shortest way out and plans from
+// there; by cost alone the whole zone joined to the start was a free corridor, and a robot
+// squeezed between a leg and a wall planned along the leg's halo and through the wall's
+// untouched stretch, bumping there on every goal (l_room, docs/EXPLORATION.md "Leaving the
+// inflation"). The escape follows the inflation, not the passable cells: a robot standing on
+// its own trail (passable) inside a chair's inflation would otherwise be held to the trail's
+// cells. The first key is 0 from a start outside, so nothing changes there. The heuristic is on
+// the cost (0 on the first key: consistent as any constant is).
+struct SearchResult {
+  int start = -1;                 // the start's state, or -1
+  std::vector<double> inside;     // per state: metres driven out of blocked cells
+  std::vector<double> cost;       // per state
+  std::vector<int> parent;        // per state: the state before it, -1 for none
+  int best(int cell) const {      // the cell's lexicographically least state, or -1
+    const int a = 2 * cell, b = a + 1;
+    const bool ra = std::isfinite(cost[a]), rb = std::isfinite(cost[b]);
+    if (!ra && !rb) return -1;
+    if (!rb) return a;
+    if (!ra) return b;
+    return (inside[a] < inside[b] || (inside[a] == inside[b] && cost[a] <= cost[b])) ? a : b;
+  }
+};
+
+SearchResult search(const Costmap& cm, const Vec2& from, int goal) {
   const KnownSpace& k = cm.known();
   const int nx = k.nx(), ny = k.ny();
-  dist.assign(static_cast<std::size_t>(nx) * ny, kInf);
-  parent.assign(dist.size(), -1);
+  const std::size_t n_cells = static_cast<std::size_t>(nx) * ny;
+  SearchResult r;
+  r.inside.assign(2 * n_cells, kInf);
+  r.cost.assign(2 * n_cells, kInf);
+  r.parent.assign(2 * n_cells, -1);
   int sx, sy;
-  if (!k.index(from, sx, sy)) return -1;
-  const int start = sy * nx + sx;
+  if (!k.index(from, sx, sy)) return r;
+  const int start_cell = sy * nx + sx;
   const double c = k.cell();
   const int gx = goal >= 0 ? goal % nx : 0, gy = goal >= 0 ? goal / nx : 0;
   const auto h = [&](int x, int y) {
@@ -53,58 +72,61 @@ int search(const Costmap& cm, const Vec2& from, int goal, std::vector<double>& d
   };
   // Per-cell rate (unknown_cost in unknown cells, 1 in free ones) and flags, read once: the
   // inner loop then touches plain arrays. A step is charged half at each end's rate.
-  const std::size_t n_cells = dist.size();
   std::vector<float> rate(n_cells);
-  std::vector<std::uint8_t> flags(n_cells);  // bit 0: blocked, bit 1: occupied
+  std::vector<std::uint8_t> flags(n_cells);  // bit 0: blocked, bit 1: occupied, bit 2: inflated
   for (int y = 0; y < ny; ++y) {
     for (int x = 0; x < nx; ++x) {
       const int i = y * nx + x;
       const KnownSpace::Cell cell_state = k.at(x, y);
       rate[i] = cell_state == KnownSpace::Cell::kUnknown ? static_cast<float>(cm.options().unknown_cost) : 1.0f;
       flags[i] = static_cast<std::uint8_t>((cm.blocked(x, y) ? 1 : 0) |
-                                           (cell_state == KnownSpace::Cell::kOccupied ? 2 : 0));
+                                           (cell_state == KnownSpace::Cell::kOccupied ? 2 : 0) |
+                                           (cm.inflated(x, y) ? 4 : 0));
     }
   }
   const auto blockedAt = [&](int x, int y) {
     return x < 0 || y < 0 || x >= nx || y >= ny || (flags[y * nx + x] & 1);
   };
-  std::vector<double> inside(n_cells, kInf);  // metres driven inside the inflation
+  // Phase 0: escaping the inflation; phase 1: out (or never in).
+  r.start = 2 * start_cell + ((flags[start_cell] & 4) ? 0 : 1);
   std::priority_queue<Node, std::vector<Node>, std::greater<Node>> open;
-  dist[start] = 0.0;
-  inside[start] = 0.0;
-  open.push({0.0, h(sx, sy), start});
+  r.cost[r.start] = 0.0;
+  r.inside[r.start] = 0.0;
+  open.push({0.0, h(sx, sy), r.start});
   while (!open.empty()) {
     const Node n = open.top();
     open.pop();
-    const int x = n.index % nx, y = n.index / nx;
-    if (n.inside > inside[n.index] || (n.inside == inside[n.index] &&
-                                       n.f > dist[n.index] + h(x, y) + 1e-12)) {
+    const int cell = n.index / 2, phase = n.index % 2;
+    const int x = cell % nx, y = cell / nx;
+    if (n.inside > r.inside[n.index] || (n.inside == r.inside[n.index] &&
+                                         n.f > r.cost[n.index] + h(x, y) + 1e-12)) {
       continue;  // stale entry
     }
-    if (n.index == goal) break;
-    const bool here_blocked = flags[n.index] & 1;
+    if (cell == goal) break;
+    const bool escaping = phase == 0;
+    const bool here_blocked = flags[cell] & 1;
     for (int d = 0; d < 8; ++d) {
       const int jx = x + kDx[d], jy = y + kDy[d];
       if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
       const int j = jy * nx + jx;
-      const bool there_blocked = flags[j] & 1;
-      if (there_blocked && !here_blocked) continue;
-      // Leaving an inflated zone never goes through the obstacle itself.
+      // Never through an obstacle itself; out of the escape, never into a blocked cell.
       if (flags[j] & 2) continue;
+      if ((flags[j] & 1) && !escaping) continue;
       // No corner cutting: a diagonal step needs both side cells passable.
-      if (d >= 4 && !here_blocked && (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) continue;
+      if (d >= 4 && !escaping && (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) continue;
       const double step = d >= 4 ? c * std::sqrt(2.0) : c;
-      const double nd = dist[n.index] + 0.5 * step * (double(rate[n.index]) + double(rate[j]));
-      const double ni = inside[n.index] + (here_blocked ? step : 0.0);
-      if (ni < inside[j] || (ni == inside[j] && nd < dist[j])) {
-        inside[j] = ni;
-        dist[j] = nd;
-        parent[j] = n.index;
-        open.push({ni, nd + h(jx, jy), j});
+      const int to = 2 * j + ((escaping && (flags[j] & 4)) ? 0 : 1);
+      const double nd = r.cost[n.index] + 0.5 * step * (double(rate[cell]) + double(rate[j]));
+      const double ni = r.inside[n.index] + (here_blocked ? step : 0.0);
+      if (ni < r.inside[to] || (ni == r.inside[to] && nd < r.cost[to])) {
+        r.inside[to] = ni;
+        r.cost[to] = nd;
+        r.parent[to] = n.index;
+        open.push({ni, nd + h(jx, jy), to});
       }
     }
   }
-  return start;
+  return r;
 }
 
 // True if the straight segment a-b crosses no blocked cell (sampled at a quarter cell).
@@ -162,11 +184,40 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
       }
     }
   }
+  inflated_ = blocked_;
+  // Where the robot has been it fits: a cell its centre drove through is passable though the
+  // inflation covers it (an obstacle found after it passed, with less than the margin to
+  // spare), unless within the inflation of a bump (where the rim touched: a path there would
+  // touch again) or itself occupied.
+  std::vector<std::uint8_t> near_bump(blocked_.size(), 0);
+  for (int y = 0; y < ny; ++y) {
+    for (int x = 0; x < nx; ++x) {
+      if (!known.bumped(x, y)) continue;
+      for (const auto& [dx, dy] : disc) {
+        const int jx = x + dx, jy = y + dy;
+        if (jx >= 0 && jy >= 0 && jx < nx && jy < ny) near_bump[jy * nx + jx] = 1;
+      }
+    }
+  }
+  for (int y = 0; y < ny; ++y) {
+    for (int x = 0; x < nx; ++x) {
+      const int i = y * nx + x;
+      if (blocked_[i] && known.visited(x, y) && !near_bump[i] &&
+          known.at(x, y) != KnownSpace::Cell::kOccupied) {
+        blocked_[i] = 0;
+      }
+    }
+  }
 }
 
 bool Costmap::blocked(int ix, int iy) const {
   if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return true;
   return blocked_[iy * known_.nx() + ix] != 0;
+}
+
+bool Costmap::inflated(int ix, int iy) const {
+  if (ix < 0 || iy < 0 || ix >= known_.nx() || iy >= known_.ny()) return true;
+  return inflated_[iy * known_.nx() + ix] != 0;
 }
 
 bool Costmap::blocked(const Vec2& p) const {
@@ -180,15 +231,14 @@ std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const
   int gx, gy;
   if (!k.index(to, gx, gy) || costmap.blocked(gx, gy)) return std::nullopt;
   const int goal = gy * k.nx() + gx;
-  std::vector<double> dist;
-  std::vector<int> parent;
-  const int start = search(costmap, from, goal, dist, parent);
-  if (start < 0 || !std::isfinite(dist[goal])) return std::nullopt;
+  const SearchResult r = search(costmap, from, goal);
+  const int end = r.start < 0 ? -1 : r.best(goal);
+  if (end < 0) return std::nullopt;
   std::vector<int> cells;
-  for (int i = goal; i != start; i = parent[i]) cells.push_back(i);
+  for (int i = end; i != r.start; i = r.parent[i]) cells.push_back(i / 2);
   std::reverse(cells.begin(), cells.end());
   PathPlan plan;
-  plan.cost = dist[goal];
+  plan.cost = r.cost[end];
   const auto at = [&](int i) { return k.centre(i % k.nx(), i / k.nx()); };
   // Line-of-sight shortening (the "string pulling" of grid paths): from each anchor, go straight
   // to the farthest later cell it sees over the inflated grid. While the start is inside an
@@ -226,9 +276,18 @@ std::optional<PathPlan> planPath(const Costmap& costmap, const Vec2& from, const
 }
 
 DistanceField::DistanceField(const Costmap& costmap, const Vec2& from) : costmap_(costmap) {
-  if (search(costmap, from, -1, dist_, parent_) < 0) {
-    dist_.assign(static_cast<std::size_t>(costmap.known().nx()) * costmap.known().ny(), kInf);
-    parent_.assign(dist_.size(), -1);
+  const std::size_t n = static_cast<std::size_t>(costmap.known().nx()) * costmap.known().ny();
+  dist_.assign(n, kInf);
+  parent_.assign(n, -1);
+  const SearchResult r = search(costmap, from, -1);
+  if (r.start < 0) return;
+  // Each cell's least state; its parent is the cell of that state's parent (a cell reached in
+  // both phases, a trail cell of the escape also reached from outside, keeps the better).
+  for (std::size_t i = 0; i < n; ++i) {
+    const int b = r.best(static_cast<int>(i));
+    if (b < 0) continue;
+    dist_[i] = r.cost[static_cast<std::size_t>(b)];
+    if (r.parent[static_cast<std::size_t>(b)] >= 0) parent_[i] = r.parent[static_cast<std::size_t>(b)] / 2;
   }
 }
 

@@ -80,6 +80,9 @@ void ExploreLoop::finish(const std::string& why) {
 void ExploreLoop::track(const Pose2& pose) {
   const double step = (pose.position() - last_pose_.position()).norm();
   if (std::isfinite(step)) report_.travel_m += step;
+  // Cells the centre drives through stay passable (path_planner.h); standing is not driving,
+  // so a robot that has not moved is boxed in where the costmap says it is.
+  if (step > 0.0) known_.markVisited(last_pose_.position(), pose.position());
   last_pose_ = pose;
   if ((pose.position() - recorded_.position()).norm() >= options_.record_every) {
     recorded_ = pose;

@@ -7,6 +7,9 @@
 // Contacts and bumps are permanent (markContact, markBump); the map's obstacles are replaced
 // each time the map changes (setMapObstacles), so a table the sampler drops stops blocking.
 // Occupied wins over free: a cell both swept and touched is occupied.
+// Apart from the three states, a cell records whether the robot's centre drove through it
+// (markVisited) and whether a bump was marked in it: the planner keeps such cells passable
+// (path_planner.h, "where the robot has been").
 //
 // Units: metres, arena frame. Cells are indexed (ix, iy) from `lo`; points outside the region
 // are outside() and count as blocked for the planner.
@@ -37,7 +40,11 @@ class KnownSpace {
   void markBody(const Vec2& position, double radius);
   // A located contact point (a shapelet's position) or a bumper's hit point: occupied for good.
   void markContact(const Vec2& point);
-  void markBump(const Vec2& point) { markContact(point); }
+  void markBump(const Vec2& point);
+  // The robot's centre drove along the segment a..b: every cell it crosses is visited.
+  void markVisited(const Vec2& a, const Vec2& b);
+  bool visited(int ix, int iy) const;  // false outside the grid
+  bool bumped(int ix, int iy) const;   // a bump was marked in the cell; false outside
   // The current map's legs (each table's four leg squares) and walls: occupied until the next
   // call replaces them.
   void setMapObstacles(std::span<const MapTable> tables, std::span<const MapWall> walls);
@@ -66,6 +73,8 @@ class KnownSpace {
   std::vector<std::uint8_t> swept_;    // 1: free by a ray or the body
   std::vector<std::uint8_t> touched_;  // 1: a contact or bump (permanent)
   std::vector<std::uint8_t> mapped_;   // 1: under the current map's legs and walls
+  std::vector<std::uint8_t> visited_;  // 1: the robot's centre drove through it
+  std::vector<std::uint8_t> bumped_;   // 1: a bump was marked in it
 };
 
 }  // namespace crunch::exploration

@@ -7,7 +7,10 @@
 // A start inside the inflation (the robot stands closer to an obstacle than planned: after a
 // bump, or squeezed through a gap the margin closes) leaves it by its shortest way out: paths
 // are compared by the metres they drive inside the inflation first, then by cost, so the zone
-// is an exit, never a corridor to wherever is cheapest.
+// is an exit, never a corridor to wherever is cheapest. Where the robot has been it fits: a cell
+// its centre drove through (KnownSpace::markVisited) stays passable under the inflation, unless
+// within the inflation of a bump or itself occupied, so a robot that drove under a chair before
+// its legs were known leaves the way it came (the inflation closes the chair's gaps).
 //
 // DistanceField is the same search run as Dijkstra from the robot to every cell (one search per
 // decision), so a policy scores hundreds of candidate poses by their path length at the cost of
@@ -37,11 +40,15 @@ struct PlannerOptions {
   Status validate() const;
 };
 
-// The configuration space: true where the robot's centre may not stand.
+// The configuration space: true where the robot's centre may not stand (inflated occupied
+// cells and region edge, less the cells the robot drove through away from bumps).
 class Costmap {
  public:
   Costmap(const KnownSpace& known, const PlannerOptions& options);
   bool blocked(int ix, int iy) const;  // true outside the grid
+  // Within robot_radius + margin of an occupied cell or the region's edge, whether or not the
+  // robot drove there (blocked() less the trail); true outside the grid.
+  bool inflated(int ix, int iy) const;
   bool blocked(const Vec2& p) const;
   const KnownSpace& known() const { return known_; }
   const PlannerOptions& options() const { return options_; }
@@ -50,6 +57,7 @@ class Costmap {
   const KnownSpace& known_;
   PlannerOptions options_;
   std::vector<std::uint8_t> blocked_;
+  std::vector<std::uint8_t> inflated_;
 };
 
 struct PathPlan {
@@ -74,8 +82,11 @@ class DistanceField {
   double to(const Vec2& p) const;
   double to(int ix, int iy) const;
   // The cell before cell `i` (iy * nx + ix) on its shortest path from the start; -1 for the
-  // start and for cells not reached. Parents always cost less than their children, so
-  // following them from any reached cell ends at the start.
+  // start and for cells not reached. Following them from any reached cell ends at the start
+  // (each parent's path is less than its child's: metres out of blocked cells, then cost).
+  // Parents cost less than their children, except at a cell reached both by the escape from an
+  // inflated start and from outside (a trail cell), which keeps the path with fewer metres out
+  // of blocked cells.
   int parent(int i) const { return parent_[static_cast<std::size_t>(i)]; }
   // The search's cost-weighted metres to cell `i` (infinity if not reached), without to()'s
   // blocked check (a start inside an inflated zone reaches blocked cells on its way out).
