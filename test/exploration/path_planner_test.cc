@@ -194,6 +194,24 @@ TEST_CASE("Costmap: where the robot has been it fits, unless it bumped there", "
     // The other gaps stay closed: only the trail opens.
     CHECK(cm.blocked(Vec2{1.51 + 0.18, 1.51}));
   }
+  // A trail that crossed a cell corner diagonally (cells 8-connected): the two cells it joins
+  // at the corner are a step the robot drove, though both side cells are blocked.
+  {
+    KnownSpace d({0, 0}, {3, 3}, 0.05);
+    for (const Vec2& corner : {Vec2{1, 1}, Vec2{1, -1}, Vec2{-1, 1}, Vec2{-1, -1}})
+      d.markContact(chair + 0.18 * corner);
+    d.markVisited(chair, {1.51, 1.51 - 0.1});          // down the middle
+    d.markVisited({1.51, 1.51 - 0.1}, {1.525, 1.375});  // ...into the cell centred (1.525, 1.375)
+    d.markVisited({1.575, 1.325}, {1.575, 0.6});        // and on from the diagonal cell
+    const Costmap cd(d, PlannerOptions{});
+    int ax, ay, bx, by;
+    REQUIRE(d.index({1.525, 1.375}, ax, ay));
+    REQUIRE(d.index({1.575, 1.325}, bx, by));
+    REQUIRE((bx == ax + 1 && by == ay - 1));
+    REQUIRE(cd.blocked(ax + 1, ay));  // both side cells blocked: a corner cut
+    REQUIRE(cd.blocked(ax, ay - 1));
+    CHECK(planPath(cd, chair, {1.575, 0.6}));
+  }
   // A bump beside the trail: the rim touched there, so the trail near it closes again.
   k.markBump({1.51 + 0.1, 1.51 - 0.18});
   const Costmap cm(k, PlannerOptions{});

@@ -112,8 +112,13 @@ SearchResult search(const Costmap& cm, const Vec2& from, int goal) {
       // Never through an obstacle itself; out of the escape, never into a blocked cell.
       if (flags[j] & 2) continue;
       if ((flags[j] & 1) && !escaping) continue;
-      // No corner cutting: a diagonal step needs both side cells passable.
-      if (d >= 4 && !escaping && (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) continue;
+      // No corner cutting: a diagonal step needs both side cells passable, unless the robot's
+      // centre drove through both cells (its trail crosses cell corners: KnownSpace::markVisited
+      // marks the cells a segment crosses, which are 8-connected).
+      if (d >= 4 && !escaping && !(k.visited(x, y) && k.visited(jx, jy)) &&
+          (blockedAt(x + kDx[d], y) || blockedAt(x, y + kDy[d]))) {
+        continue;
+      }
       const double step = d >= 4 ? c * std::sqrt(2.0) : c;
       const int to = 2 * j + ((escaping && (flags[j] & 4)) ? 0 : 1);
       const double nd = r.cost[n.index] + 0.5 * step * (double(rate[cell]) + double(rate[j]));
