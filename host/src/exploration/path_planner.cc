@@ -165,7 +165,6 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
   const double c = known.cell();
   blocked_.assign(static_cast<std::size_t>(nx) * ny, 0);
   const double r = options.robot_radius + options.margin;
-
   // Minkowski inflation: a cell is blocked when its centre is within r of an occupied cell's
   // centre, or within r of the region's edge (the robot is told the room's extent: its walls).
   const int k = static_cast<int>(std::ceil(r / c));
@@ -175,6 +174,8 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
       if (std::hypot(dx * c, dy * c) <= r) disc.emplace_back(dx, dy);
     }
   }
+  // The inflation of the bumps alone (a bump is an occupied cell), for the trail below.
+  std::vector<std::uint8_t> near_bump(blocked_.size(), 0);
   for (int y = 0; y < ny; ++y) {
     for (int x = 0; x < nx; ++x) {
       const Vec2 p = known.centre(x, y);
@@ -183,9 +184,12 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
         blocked_[y * nx + x] = 1;
       }
       if (known.at(x, y) != KnownSpace::Cell::kOccupied) continue;
+      const bool bump = known.bumped(x, y);
       for (const auto& [dx, dy] : disc) {
         const int jx = x + dx, jy = y + dy;
-        if (jx >= 0 && jy >= 0 && jx < nx && jy < ny) blocked_[jy * nx + jx] = 1;
+        if (jx < 0 || jy < 0 || jx >= nx || jy >= ny) continue;
+        blocked_[jy * nx + jx] = 1;
+        if (bump) near_bump[jy * nx + jx] = 1;
       }
     }
   }
@@ -194,16 +198,6 @@ Costmap::Costmap(const KnownSpace& known, const PlannerOptions& options)
   // inflation covers it (an obstacle found after it passed, with less than the margin to
   // spare), unless within the inflation of a bump (where the rim touched: a path there would
   // touch again) or itself occupied.
-  std::vector<std::uint8_t> near_bump(blocked_.size(), 0);
-  for (int y = 0; y < ny; ++y) {
-    for (int x = 0; x < nx; ++x) {
-      if (!known.bumped(x, y)) continue;
-      for (const auto& [dx, dy] : disc) {
-        const int jx = x + dx, jy = y + dy;
-        if (jx >= 0 && jy >= 0 && jx < nx && jy < ny) near_bump[jy * nx + jx] = 1;
-      }
-    }
-  }
   for (int y = 0; y < ny; ++y) {
     for (int x = 0; x < nx; ++x) {
       const int i = y * nx + x;

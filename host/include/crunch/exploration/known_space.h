@@ -8,8 +8,8 @@
 // each time the map changes (setMapObstacles), so a table the sampler drops stops blocking.
 // Occupied wins over free: a cell both swept and touched is occupied.
 // Apart from the three states, a cell records whether the robot's centre drove through it
-// (markVisited) and whether a bump was marked in it: the planner keeps such cells passable
-// (path_planner.h, "where the robot has been").
+// (markVisited) and whether a bump was marked in it (markBump): the planner keeps visited cells
+// passable under the inflation except near a bump (path_planner.h, "where the robot has been").
 //
 // Units: metres, arena frame. Cells are indexed (ix, iy) from `lo`; points outside the region
 // are outside() and count as blocked for the planner.
