@@ -61,14 +61,16 @@ std::string slurp(const fs::path& p) {
   return ss.str();
 }
 
-// `crunchhost --sim --scene test/scenes/<name>.json --seed 1 --out <tmp>`.
-Outcome runScene(const std::string& name) {
+// `crunchhost --sim --model paper --scene test/scenes/<name>.json --seed 1 --out <tmp>`, or
+// another model and seed.
+Outcome runScene(const std::string& name, ObjectModel model = ObjectModel::kPaper,
+                 uint64_t seed = 1) {
   const fs::path dir = fs::temp_directory_path() / ("crunch_failure_scenes_" + name);
   fs::remove_all(dir);
   app::SimOptions opt;
   opt.scene_path = std::string(CRUNCH_SOURCE_DIR) + "/test/scenes/" + name + ".json";
-  opt.seed = 1;
-  opt.mapping.model.objects = ObjectModel::kPaper;
+  opt.seed = seed;
+  opt.mapping.model.objects = model;
   opt.out_dir = dir.string();
   std::ostringstream out, err;
   const auto t0 = std::chrono::steady_clock::now();
@@ -255,4 +257,26 @@ TEST_CASE("Failure scenes: a large floor, 20 x 20 m with 100 tables", "[app][sce
                              .max_position_error = 0.007,
                              .max_peak_tables = 194,
                              .max_seconds = 150.0});
+}
+
+TEST_CASE("Failure scenes: thin-legged chairs, rooms model", "[app][scenes]") {
+  // A 0.35 m stool on 0.025 m legs and a 0.42 x 0.40 m chair on 0.022 m legs, too low for the
+  // robot to drive under: every leg is touched from outside only, so its contacts fix its outer
+  // faces and nothing fixes its side. Mapped with `--model rooms` (the paper's model has one
+  // size). Measured (seeds 1-5): recall 0.5, 1.0, 0.5, 1.0, 0.5, precision 1.0, no phantoms;
+  // before the legs took their table's side about their outer corners and the side steps drew
+  // from the whole prior (docs/BLACKBOARD.md "A leg's side, seen from outside"): 0, 0, 0, 0.5,
+  // 0 (legs born too wide, their centres too far in, could not form a table). Bounds over seeds
+  // 1-3: at least 3 of the 6 objects (one fewer than measured), no phantom on any seed.
+  int found = 0;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    const Outcome o = runScene("thin_legs", ObjectModel::kRooms, seed);
+    const nlohmann::json& a = o.report.at("accuracy");
+    INFO("seed " << seed << ": " << a.dump());
+    CHECK(a.at("true_tables").get<int>() == 2);
+    CHECK(a.at("phantoms_near_walls").get<int>() == 0);
+    CHECK(a.at("phantoms_elsewhere").get<int>() == 0);
+    found += static_cast<int>(std::lround(a.at("recall").get<double>() * 2));
+  }
+  CHECK(found >= 3);
 }

@@ -1808,38 +1808,116 @@ void Sampler::splitTable(int32_t id, double beta) {
 void Sampler::tableLegSide(int32_t id, double beta) {
   const ModelParams& p = bb_.params();
   const TableHyp old = bb_.table(id);
-  const double leg = old.leg + rng_.normal(0, opt_.leg_side_sigma);
+  const double leg = drawSideStep(old.leg);
+  const double step = leg - old.leg;
   if (!std::isfinite(p.logSizePrior(old.width, old.depth, leg))) return;
-  // Symmetric Gaussian step on one parameter: log q(reverse) = log q(forward).
+  // Half the steps carry the children: each leg's side changes by the same step and its centre
+  // moves with its corner's leg centre, so the faces on the top's outline stay where they are
+  // (the faces the whiskers touch from outside the object) and the legs grow or shrink inwards.
+  // A table's leg side and its legs' are held together by eq. 10's leg-width term (sigma_w), so
+  // moving either alone barely moves the pair, as a table's pose and its legs' (jitterTable).
+  // Not under reversible jump (as legSide's anchor: a carried leg's centre moves).
+  const bool carry = !rj() && rng_.uniform() < 0.5;
+  // Symmetric: the branch is drawn independently of the state, the side step is symmetric
+  // (drawSideStep), and the negated step gives back the old state (each child keeps its corner,
+  // whose leg centre moves by the same offset back). For a given step the map is a translation
+  // of (leg side, children's sides and centres): Jacobian 1.
   [[maybe_unused]] const double log_q_ratio = 0.0;
-  if (rj() && !childrenAtCorners(reshaped(old, old.pose, old.width, old.depth, leg))) return;
+  const TableHyp shape = reshaped(old, old.pose, old.width, old.depth, leg);
+  if (rj() && !childrenAtCorners(shape)) return;
   Touched t;
   t.tables.add(id);
-  for (int i = 0; i < old.n_children; ++i) t.legs.add(old.children[i]);
+  const int n = old.n_children;
+  std::array<int32_t, kMaxChildren> kids;
+  std::array<Pose2, kMaxChildren> kid_old;
+  std::array<Pose2, kMaxChildren> kid_new;
+  std::array<double, kMaxChildren> side_old;
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const LegHyp& l = bb_.leg(old.children[i]);
+    kids[k] = old.children[i];
+    kid_old[k] = l.pose;
+    side_old[k] = l.side;
+    t.legs.add(kids[k]);
+    if (!carry) continue;
+    if (!p.legSideAllowed(l.side + step)) return;
+    const Vec2 shift = shape.corner(l.corner) - old.corner(l.corner);
+    kid_new[k] = {l.pose.x + shift.x(), l.pose.y + shift.y(), l.pose.theta};
+    bb_.shapeletsNear(kid_old[k].position(), t.shapelets);
+    bb_.shapeletsNear(kid_new[k].position(), t.shapelets);
+  }
   begin();
   const double e0 = bb_.energyBefore(t);
   bb_.reshapeTable(id, old.pose, old.width, old.depth, leg);
+  if (carry) {
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<size_t>(i);
+      bb_.moveLeg(kids[k], kid_new[k]);
+      bb_.setLegSide(kids[k], side_old[k] + step);
+    }
+  }
   const double e1 = bb_.energyAfter(t);
-  if (!decide(e1 - e0, beta)) bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+  if (decide(e1 - e0, beta)) return;
+  if (carry) {
+    for (int i = 0; i < n; ++i) {
+      const auto k = static_cast<size_t>(i);
+      bb_.setLegSide(kids[k], side_old[k]);
+      bb_.moveLeg(kids[k], kid_old[k]);
+    }
+  }
+  bb_.reshapeTable(id, old.pose, old.width, old.depth, old.leg);
+}
+
+double Sampler::drawSideStep(double side) {
+  // Half the steps are local (a Gaussian of leg_side_sigma), half a fresh draw from the prior's
+  // range: the evidence pins a leg's side only where it is touched on opposite faces or swept
+  // close, so its conditional is often flat over most of the range with a cliff where negative
+  // evidence starts, and a leg born too wide is many local steps from where its table needs it.
+  // Both kernels are symmetric (q(s' | s) = q(s | s')), so their mixture is: log q ratio 0.
+  const ModelParams& p = bb_.params();
+  if (rng_.uniform() < 0.5) return side + rng_.normal(0, opt_.leg_side_sigma);
+  return rng_.uniform(p.leg_min, p.leg_max);
 }
 
 void Sampler::legSide(int32_t id, double beta) {
   const ModelParams& p = bb_.params();
-  const LegHyp& l = bb_.leg(id);
-  const double old = l.side;
-  const double side = old + rng_.normal(0, opt_.leg_side_sigma);
+  const LegHyp l = bb_.leg(id);
+  const double side = drawSideStep(l.side);
+  const double step = side - l.side;
   if (!p.legSideAllowed(side)) return;
-  // Symmetric Gaussian step on one parameter.
+  // The point of the leg's square that stays: its centre, or one of its four corners (each a
+  // fifth of the time). A contact fixes the face it lies on, not the leg's centre: whiskers touch
+  // a leg from outside, on one face or two adjacent ones, and a side step about the centre moves
+  // every face (so a leg born too wide could not shrink without leaving its contacts). About the
+  // corner between the touched faces the step keeps both.
+  // Under reversible jump the centre: its state space holds each leg in a shapelet's birth box,
+  // which a step that moves the centre would have to check, and its exact test holds the leg's
+  // pose fixed (detailed_balance_test); the side draw itself is the same.
+  const uint32_t anchor = rj() ? 4 : rng_.below(5);
+  Pose2 moved = l.pose;
+  if (anchor < 4) {
+    // Corner i of the leg's square at (+-side/2, +-side/2) in its frame stays put.
+    const double sx = (anchor == 0 || anchor == 3) ? 1.0 : -1.0, sy = anchor < 2 ? 1.0 : -1.0;
+    const Vec2 shift = Pose2{0, 0, l.pose.theta}.toWorld(Vec2{-0.5 * step * sx, -0.5 * step * sy});
+    moved = {l.pose.x + shift.x(), l.pose.y + shift.y(), l.pose.theta};
+  }
+  // Symmetric: the anchor is drawn independently of the state and the side step is symmetric
+  // (drawSideStep); from the new state the same anchor and the negated step give back the old one
+  // (the anchor's world position is unchanged by construction). A translation: Jacobian 1.
   [[maybe_unused]] const double log_q_ratio = 0.0;
   Touched t;
   t.legs.add(id);
   t.tables.add(l.parent);
   bb_.shapeletsNear(l.pose.position(), t.shapelets);
+  bb_.shapeletsNear(moved.position(), t.shapelets);
   begin();
   const double e0 = bb_.energyBefore(t);
+  bb_.moveLeg(id, moved);
   bb_.setLegSide(id, side);
   const double e1 = bb_.energyAfter(t);
-  if (!decide(e1 - e0, beta)) bb_.setLegSide(id, old);
+  if (decide(e1 - e0, beta)) return;
+  bb_.setLegSide(id, l.side);
+  bb_.moveLeg(id, l.pose);
 }
 
 TableHyp Sampler::reshaped(const TableHyp& t, const Pose2& pose, double width, double depth,
@@ -1990,33 +2068,81 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
       adoptAt(bb_, corner, [&] { return pose.toLocal(corner); }, r, leg, adopt, pairs);
     }
   }
+  // One table has one leg side: the new table's is the mean of its legs' and they all take it in
+  // the same move (legs born with sides drawn from the prior rarely agree, and eq. 10's leg-width
+  // term would keep their table from paying). Each leg takes it about the corner of its square
+  // farthest from the table's centre: whiskers touch a table's legs from outside its top, so a
+  // contact fixes a leg's outer faces, and a side its contacts leave open (an unswept inside)
+  // changes the leg inwards. About its centre instead every face moved, off its contacts.
+  double side_sum = l.side;
+  for (int i = 0; i < adopt.n; ++i) side_sum += bb_.leg(adopt.ids[i]).side;
+  const double table_leg = side_sum / (adopt.n + 1);
+  const Pose2 unfitted = pose;
+  const auto resided = [&](const Pose2& at, double side) {
+    const Vec2 q = unfitted.toLocal(at.position());
+    const double h = 0.5 * (side - table_leg);
+    const Vec2 out =
+        unfitted.toWorld(Vec2{q.x() + (q.x() >= 0 ? h : -h), q.y() + (q.y() >= 0 ? h : -h)});
+    return Pose2{out.x(), out.y(), at.theta};
+  };
+  std::array<Pose2, 5> old_pose, new_pose;  // the seed leg's, then the adopted legs'
+  std::array<double, 5> old_side;
+  old_pose[0] = l.pose;
+  old_side[0] = l.side;
+  for (int i = 0; i < adopt.n; ++i) {
+    old_pose[static_cast<size_t>(i + 1)] = bb_.leg(adopt.ids[i]).pose;
+    old_side[static_cast<size_t>(i + 1)] = bb_.leg(adopt.ids[i]).side;
+  }
+  for (int i = 0; i <= adopt.n; ++i) {
+    const auto j = static_cast<size_t>(i);
+    new_pose[j] = resided(old_pose[j], old_side[j]);
+    pairs.at[j] = new_pose[j].position();  // pairs: the seed's, then the adopted legs' in order
+  }
+  // The spans from centre to centre, between the legs as re-sided: along each axis, the mean
+  // over the adopted legs across the table from the seed leg, or the drawn span moved with the
+  // seed's centre where none stands there. The top is then its legs' outline.
+  const Vec2 seed_at = unfitted.toLocal(new_pose[0].position());
+  double span[2] = {std::abs(sx) + 0.5 * (old_side[0] - table_leg),
+                    std::abs(sy) + 0.5 * (old_side[0] - table_leg)};
+  for (int ax = 0; ax < 2; ++ax) {
+    double sum = 0.0;
+    int n_far = 0;
+    for (int i = 1; i <= adopt.n; ++i) {
+      const Vec2 q = unfitted.toLocal(new_pose[static_cast<size_t>(i)].position());
+      const double off = ax == 0 ? q.x() - seed_at.x() : q.y() - seed_at.y();
+      const double half = 0.5 * (ax == 0 ? std::abs(sx) : std::abs(sy));
+      if (std::abs(off) > half) {
+        sum += std::abs(off);
+        ++n_far;
+      }
+    }
+    if (n_far > 0) span[ax] = sum / n_far;
+  }
+  const double tw = span[0] + table_leg, td = span[1] + table_leg;
+  if (!std::isfinite(p.logSizePrior(tw, td, table_leg))) return;
+  // Each pair's corner of the top so sized (the same corner: the signs of its offset).
+  for (int i = 0; i < pairs.n; ++i) {
+    const Vec2 o = pairs.local[static_cast<size_t>(i)];
+    pairs.local[static_cast<size_t>(i)] = {std::copysign(0.5 * span[0], o.x()),
+                                           std::copysign(0.5 * span[1], o.y())};
+  }
   // As proposeParent: the table where its corners fit its legs best, its legs turned to it.
   const bool fitted = opt_.fit_parent && adopt.n > 0;
   if (fitted) pose = pairs.fit(pose.theta);
   const Turn turn = (fitted || from_partners) ? Turn::kAll : Turn::kNoLeg;
   std::array<int32_t, 4> adopt_parent;
-  std::array<double, 5> old_side;  // the seed leg's, then the adopted legs'
   Touched t;
   t.legs.add(leg);
   t.tables.add(l.parent);
-  // One table has one leg side: the new table's is the mean of its legs' and they all take it in
-  // the same move (legs born with sides drawn from the prior rarely agree, and eq. 10's leg-width
-  // term would keep their table from paying).
-  double side_sum = l.side;
-  old_side[0] = l.side;
   bb_.shapeletsNear(c, t.shapelets);
+  bb_.shapeletsNear(new_pose[0].position(), t.shapelets);
   for (int i = 0; i < adopt.n; ++i) {
     adopt_parent[static_cast<size_t>(i)] = bb_.leg(adopt.ids[i]).parent;
     t.legs.add(adopt.ids[i]);
     t.tables.add(adopt_parent[static_cast<size_t>(i)]);
-    old_side[static_cast<size_t>(i + 1)] = bb_.leg(adopt.ids[i]).side;
-    side_sum += bb_.leg(adopt.ids[i]).side;
-    bb_.shapeletsNear(bb_.leg(adopt.ids[i]).pose.position(), t.shapelets);
+    bb_.shapeletsNear(old_pose[static_cast<size_t>(i + 1)].position(), t.shapelets);
+    bb_.shapeletsNear(new_pose[static_cast<size_t>(i + 1)].position(), t.shapelets);
   }
-  const double table_leg = side_sum / (adopt.n + 1);
-  // Spans centre to centre stay: the top grows with the leg side.
-  const double tw = std::abs(sx) + table_leg, td = std::abs(sy) + table_leg;
-  if (!std::isfinite(p.logSizePrior(tw, td, table_leg))) return;
   for (int32_t tab : t.tables.span())
     for (int i = 0; i < bb_.table(tab).n_children; ++i) t.legs.add(bb_.table(tab).children[i]);
   // A leg that turns with the table changes its shapelets' kernels.
@@ -2025,15 +2151,22 @@ void Sampler::proposeParentSized(int32_t leg, double beta) {
   begin();
   const double e0 = bb_.energyBefore(t);
   const int32_t table = bb_.addTable(pose, tw, td, table_leg);
-  bb_.setLegSide(leg, table_leg);
-  for (int32_t o : adopt.span()) bb_.setLegSide(o, table_leg);
-  bb_.setParent(leg, table);
-  for (int32_t o : adopt.span()) bb_.setParent(o, table);
+  const auto take = [&](int32_t o, size_t slot) {
+    bb_.moveLeg(o, new_pose[slot]);
+    bb_.setLegSide(o, table_leg);
+    bb_.setParent(o, table);
+  };
+  take(leg, 0);
+  for (int i = 0; i < adopt.n; ++i) take(adopt.ids[i], static_cast<size_t>(i + 1));
   if (decideNewTable(table, pose, turn, t, e0, beta)) return;
-  bb_.setParent(leg, l.parent);
-  for (int i = 0; i < adopt.n; ++i) bb_.setParent(adopt.ids[i], adopt_parent[static_cast<size_t>(i)]);
-  bb_.setLegSide(leg, old_side[0]);
-  for (int i = 0; i < adopt.n; ++i) bb_.setLegSide(adopt.ids[i], old_side[static_cast<size_t>(i + 1)]);
+  const auto give_back = [&](int32_t o, size_t slot, int32_t parent) {
+    bb_.setParent(o, parent);
+    bb_.setLegSide(o, old_side[slot]);
+    bb_.moveLeg(o, old_pose[slot]);
+  };
+  give_back(leg, 0, l.parent);
+  for (int i = 0; i < adopt.n; ++i)
+    give_back(adopt.ids[i], static_cast<size_t>(i + 1), adopt_parent[static_cast<size_t>(i)]);
   bb_.killTable(table);
   bb_.releaseTable(table);
 }

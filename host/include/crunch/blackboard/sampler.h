@@ -377,11 +377,15 @@ class Sampler {
   void proposeChild(int32_t table, double beta);
   void proposeParent(int32_t leg, double beta);
   // The rooms model's moves (docs/BLACKBOARD.md "Tables of any size"): a table's width and
-  // depth with one corner's leg held fixed; a table's leg side; a leg's side; and a parent for a
-  // leg whose size comes from the legs and point contacts around it.
+  // depth with one corner's leg held fixed; a table's leg side (half the time with its legs'
+  // sides, its outline held); a leg's side about its centre or a corner; and a parent for a leg
+  // whose size comes from the legs and point contacts around it, its legs re-sided about their
+  // outer corners ("A leg's side, seen from outside").
   void resizeTable(int32_t id, double beta);
   void tableLegSide(int32_t id, double beta);
   void legSide(int32_t id, double beta);
+  // A new leg side for legSide and tableLegSide: a symmetric kernel, local or from the prior.
+  double drawSideStep(double side);
   void proposeParentSized(int32_t leg, double beta);
   // Splits a table across its long axis at an orphan leg standing on one of its long sides: the
   // table keeps its children at one end and ends at that leg (a corner of it), a new table
