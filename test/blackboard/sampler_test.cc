@@ -247,6 +247,11 @@ TEST_CASE("Sampler: reversible-jump options are validated, acceptance names roun
   o.rj_wall_cell = -1.0;
   CHECK(o.validate().error().message.find("rj_wall_cell") != std::string::npos);
   o = {};
+  o.side_prior_draws = 1.5;  // a share of the side steps
+  CHECK(o.validate().error().message.find("side_prior_draws") != std::string::npos);
+  o.side_prior_draws = 1.0;
+  CHECK(o.validate());
+  o = {};
   o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 1, 0};  // walls' births alone: a valid (walls model) mix
   CHECK(o.validate());
   for (Acceptance a : {Acceptance::kTempered, Acceptance::kLiteral, Acceptance::kReversibleJump})
@@ -502,6 +507,7 @@ TEST_CASE("Rooms model: every move's local energy change equals the brute-force 
   SamplerOptions opt;
   opt.acceptance = acceptance;
   opt.prime_sigma_r = 0.02;  // sloppy proposals: more overlaps, rivals and shared corners
+  opt.side_prior_draws = 0.5;  // leg sides from the prior too: larger steps of every side move
   Sampler sampler(bb, opt, rng);
   sampler.setAudit(true);
   if (acceptance == Acceptance::kReversibleJump) sampler.enterReversibleSpace();

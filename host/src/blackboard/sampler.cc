@@ -41,6 +41,7 @@ Status SamplerOptions::validate() const {
       checkAbove("rj_wall_cell", rj_wall_cell, 0.0, 1.0),
       checkRange("resize_sigma", resize_sigma, 0.0, 1.0),
       checkRange("leg_side_sigma", leg_side_sigma, 0.0, 1.0),
+      checkRange("side_prior_draws", side_prior_draws, 0.0, 1.0),
       checkRange("wall_birth_rate", wall_birth_rate, 0.0, 1.0),
       checkRange("wall_grow_gap", wall_grow_gap, 0.0, 10.0),
       checkRange("wall_jitter_r", wall_jitter_r, 0.0, 10.0),
@@ -1869,14 +1870,13 @@ void Sampler::tableLegSide(int32_t id, double beta) {
 }
 
 double Sampler::drawSideStep(double side) {
-  // Half the steps are local (a Gaussian of leg_side_sigma), half a fresh draw from the prior's
-  // range: the evidence pins a leg's side only where it is touched on opposite faces or swept
-  // close, so its conditional is often flat over most of the range with a cliff where negative
-  // evidence starts, and a leg born too wide is many local steps from where its table needs it.
-  // Both kernels are symmetric (q(s' | s) = q(s | s')), so their mixture is: log q ratio 0.
+  // A local step (a Gaussian of leg_side_sigma), or with probability side_prior_draws a fresh
+  // draw from the prior's range. Both kernels are symmetric (q(s' | s) = q(s | s')), so their
+  // mixture is: log q ratio 0.
   const ModelParams& p = bb_.params();
-  if (rng_.uniform() < 0.5) return side + rng_.normal(0, opt_.leg_side_sigma);
-  return rng_.uniform(p.leg_min, p.leg_max);
+  if (opt_.side_prior_draws > 0.0 && rng_.uniform() >= 1.0 - opt_.side_prior_draws)
+    return rng_.uniform(p.leg_min, p.leg_max);
+  return side + rng_.normal(0, opt_.leg_side_sigma);
 }
 
 void Sampler::legSide(int32_t id, double beta) {

@@ -128,6 +128,13 @@ struct SamplerOptions {
   // Gaussian steps of a table's width and depth (one corner held fixed) and of leg sides.
   double resize_sigma = 0.03;
   double leg_side_sigma = 0.004;
+  // The share of leg-side steps (legSide, tableLegSide) drawn afresh from the prior's range
+  // instead of locally. A leg touched from outside has a conditional over its side that is flat
+  // over most of the range, so a leg born too wide is many local steps from where its table needs
+  // it: 0.5 maps thin-legged chairs (docs/BLACKBOARD.md "A leg's side, seen from outside"), but
+  // the exploring robot's draws then disagree about every leg's inner faces and infogain spends
+  // its travel re-touching legs, so it is off by default (0 draws no number for it).
+  double side_prior_draws = 0.0;
   // Walls (ModelParams::walled(); wall_moves.cc). Each sweep, each oriented shapelet
   // no wall explains yet seeds a data-driven wall birth with this probability: a segment fitted
   // to the collinear shapelets around it (grown along the line while the next inlier is within
@@ -157,7 +164,7 @@ struct SamplerOptions {
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
   // smart_parent_gain 0..1e6; rj_moves' weights 0..1e6, not all 0; rj_box_margin (0, 1],
   // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell and rj_wall_cell (0, 1]; resize_sigma and
-  // leg_side_sigma 0..1 m; wall_birth_rate 0..1; wall lengths 0..10 m and angles 0..pi.
+  // leg_side_sigma 0..1 m; side_prior_draws 0..1; wall_birth_rate 0..1; wall lengths 0..10 m and angles 0..pi.
   // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 };
