@@ -164,7 +164,8 @@ struct SamplerOptions {
   // a finite double); 0 <= r1 <= r2 <= r3 <= 1; proposal spreads 0..1 m and 0..pi rad;
   // smart_parent_gain 0..1e6; rj_moves' weights 0..1e6, not all 0; rj_box_margin (0, 1],
   // rj_box_theta (0, pi/4], rj_steps_per_shapelet 1..1000, rj_cell and rj_wall_cell (0, 1]; resize_sigma and
-  // leg_side_sigma 0..1 m; side_prior_draws 0..1; wall_birth_rate 0..1; wall lengths 0..10 m and angles 0..pi.
+  // leg_side_sigma 0..1 m; side_prior_draws 0..1; wall_birth_rate 0..1; wall lengths 0..10 m
+  // and angles 0..pi.
   // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 };
