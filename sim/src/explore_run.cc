@@ -154,7 +154,8 @@ Result<ExploreRun> runExploration(const SimScene& scene, SensorModel& sensor,
       if (policy->samplesWanted() > 0) samples(policy->samplesWanted(), drawn);
       double ms = 0.0;
       const auto d = exploration::decide(*policy, known, eo.planner, at, drawn, mounts, mopt.model,
-                                         scene.poses, rep.whisks, rep.travel_m, true, 0.0, rng, &ms);
+                                         scene.poses, rep.whisks, rep.travel_m, true, 0.0, {}, 0.0,
+                                         rng, &ms);
       total_ms += ms;
       ++decisions;
       rep.decision_ms_max = std::max(rep.decision_ms_max, ms);

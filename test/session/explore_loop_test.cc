@@ -49,6 +49,23 @@ class SamplingListPolicy final : public exploration::ExplorePolicy {
   int wanted_;
 };
 
+// The list policy, recording the goals given up that each decision was told of.
+class GivenUpListPolicy final : public exploration::ExplorePolicy {
+ public:
+  explicit GivenUpListPolicy(std::vector<Pose2> goals) : list_(std::move(goals)) {}
+  exploration::ExplorePolicyKind kind() const override { return exploration::ExplorePolicyKind::kGrid; }
+  exploration::Decision next(const exploration::ExploreState& state, Rng& rng) override {
+    given_up.emplace_back(state.given_up.begin(), state.given_up.end());
+    radius.push_back(state.given_up_radius);
+    return list_.next(state, rng);
+  }
+  std::vector<std::vector<Vec2>> given_up;
+  std::vector<double> radius;
+
+ private:
+  ListPolicy list_;
+};
+
 Scene room(std::vector<TableSpec> tables = {}) {
   Scene s;
   s.width = 4.0;
@@ -149,6 +166,36 @@ TEST_CASE("ExploreLoop: the whisk budget ends the run and says so", "[session]")
   REQUIRE(loop.finished());
   CHECK(loop.report().whisks == 2);
   CHECK(loop.report().stop_reason == "whisk budget reached");
+}
+
+TEST_CASE("ExploreLoop: a goal given up is passed to every later decision", "[session]") {
+  const Scene scene = room();
+  const auto world = sim::World::build(scene);
+  sim::KinematicBase base(*world, {.start = {0.6, 0.6, 0.0}});
+  KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
+  // Goal 1 stands inside a ring of contacts: no path reaches it, so it is given up at once.
+  for (int i = 0; i < 120; ++i) {
+    const double a = 2 * kPi * i / 120;
+    known.markContact(Vec2(3.0, 2.0) + 0.3 * Vec2(std::cos(a), std::sin(a)));
+  }
+  GivenUpListPolicy policy({{3.0, 2.0, 0.0}, {1.2, 0.6, 0.0}});
+  ExploreLoop::Options o;
+  o.give_up_radius = 0.4;
+  ExploreLoop loop(base, known, policy, defaultWhiskerArray(), ModelParams{}, {}, o, {});
+  run(loop, base, 200.0);
+  REQUIRE(loop.finished());
+  CHECK(loop.report().stop_reason == "list done");
+  CHECK(loop.report().whisks == 1);
+  REQUIRE(policy.given_up.size() == 3);
+  CHECK(policy.given_up[0].empty());
+  for (std::size_t i = 1; i < 3; ++i) {
+    REQUIRE(policy.given_up[i].size() == 1);
+    CHECK((policy.given_up[i][0] - Vec2(3.0, 2.0)).norm() < 1e-12);
+    CHECK(policy.radius[i] == 0.4);
+  }
+  o.give_up_radius = -1.0;
+  CHECK_FALSE(o.validate());
+  CHECK(o.validate().error().message.find("give_up_radius") != std::string::npos);
 }
 
 TEST_CASE("ExploreLoop: a robot boxed in ends the run cleanly and says why", "[session]") {

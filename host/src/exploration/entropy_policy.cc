@@ -95,7 +95,7 @@ Decision EntropyPolicy::next(const ExploreState& state, Rng& rng) {
       for (int d = 0; d < 8; ++d) {
         const double a = 2.0 * kPi * d / 8;
         const Vec2 p = c - eo_.aim_distance * Vec2{std::cos(a), std::sin(a)};
-        if (state.costmap.blocked(p)) continue;
+        if (!choosable(state, p)) continue;
         const double t = state.travel.to(p);
         if (t < travel) {
           travel = t;

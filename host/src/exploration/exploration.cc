@@ -47,12 +47,14 @@ Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOpt
                 const Pose2& robot, std::span<const MapSample> samples,
                 const std::vector<WhiskerMount>& mounts, const ModelParams& model,
                 std::span<const Pose2> grid_poses, int whisks, double travel_m, bool teleport,
-                double arrival_tolerance, Rng& rng, double* decision_ms) {
+                double arrival_tolerance, std::span<const Vec2> given_up,
+                double given_up_radius, Rng& rng, double* decision_ms) {
   const auto t0 = std::chrono::steady_clock::now();
   const Costmap costmap(known, planner);
   const DistanceField field(costmap, robot.position());
   const ExploreState state{robot, known, costmap, field, samples, mounts, model,
-                           grid_poses, whisks, travel_m, teleport, arrival_tolerance};
+                           grid_poses, whisks, travel_m, teleport, arrival_tolerance,
+                           given_up, given_up_radius};
   Decision d = policy.next(state, rng);
   if (decision_ms) {
     *decision_ms =

@@ -54,7 +54,7 @@ class FrontierPolicy final : public ExplorePolicy {
       for (double x = k.lo().x() + 0.5 * sp; x < k.hi().x(); x += sp) {
         const Vec2 p(x, y);
         const double d = s.travel.to(p);
-        if (std::isfinite(d) && !s.costmap.blocked(p)) positions_.push_back({d, p});
+        if (choosable(s, p)) positions_.push_back({d, p});
       }
     }
     std::sort(positions_.begin(), positions_.end(),

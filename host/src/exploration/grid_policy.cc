@@ -15,8 +15,7 @@ class GridPolicy final : public ExplorePolicy {
     while (next_ < s.grid_poses.size()) {
       const Pose2 p = s.grid_poses[next_++];
       if (s.teleport) return Decision{p, "", 0.0};
-      if (s.costmap.blocked(p.position())) continue;
-      if (!std::isfinite(s.travel.to(p.position()))) continue;
+      if (!choosable(s, p.position())) continue;
       return Decision{p, "", 0.0};
     }
     return Decision{std::nullopt, "the pose list is done", 0.0};

@@ -406,7 +406,7 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   for (double y = lo.y() + 0.5 * step; y < hi.y(); y += step)
     for (double x = lo.x() + 0.5 * step; x < hi.x(); x += step) {
       const Vec2 p{x, y};
-      if (state.costmap.blocked(p) || !std::isfinite(state.travel.to(p))) continue;
+      if (!choosable(state, p)) continue;
       for (int h = 0; h < nh; ++h) candidates.push_back({x, y, wrapPi(2.0 * kPi * h / nh)});
     }
   // Fig. 7: the poses that would settle each leg of each draw.
@@ -416,7 +416,7 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
       for (int d = 0; d < 8; ++d) {
         const double a = 2.0 * kPi * d / 8;
         const Vec2 p = leg.pose.position() - io_.aim_distance * Vec2{std::cos(a), std::sin(a)};
-        if (state.costmap.blocked(p) || !std::isfinite(state.travel.to(p))) continue;
+        if (!choosable(state, p)) continue;
         candidates.push_back({p.x(), p.y(), wrapPi(a)});
       }
   // Duplicates (draws agreeing on a leg) are scored once.

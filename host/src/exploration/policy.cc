@@ -1,9 +1,17 @@
 #include "crunch/exploration/policy.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
 namespace crunch::exploration {
+
+bool choosable(const ExploreState& s, const Vec2& p) {
+  if (s.costmap.blocked(p) || !std::isfinite(s.travel.to(p))) return false;
+  return std::none_of(s.given_up.begin(), s.given_up.end(), [&](const Vec2& g) {
+    return (g - p).norm() < s.given_up_radius;
+  });
+}
 
 Result<ExplorePolicyKind> explorePolicyByName(const std::string& name) {
   if (name == "grid") return ExplorePolicyKind::kGrid;

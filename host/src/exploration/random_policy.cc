@@ -16,7 +16,7 @@ class RandomPolicy final : public ExplorePolicy {
     const KnownSpace& k = s.known;
     for (int iy = 0; iy < k.ny(); ++iy) {
       for (int ix = 0; ix < k.nx(); ++ix) {
-        if (!s.costmap.blocked(ix, iy) && std::isfinite(s.travel.to(ix, iy))) {
+        if (choosable(s, k.centre(ix, iy))) {
           cells_.push_back(iy * k.nx() + ix);
         }
       }

@@ -28,6 +28,9 @@ Status ExploreLoop::Options::validate() const {
   if (!positive(record_every)) return Error{"explore loop record_every: must be above 0"};
   if (max_failed_goals < 1) return Error{"explore loop max_failed_goals: must be >= 1"};
   if (max_bumps_per_goal < 1) return Error{"explore loop max_bumps_per_goal: must be >= 1"};
+  if (!std::isfinite(give_up_radius) || give_up_radius < 0) {
+    return Error{"explore loop give_up_radius: must be >= 0"};
+  }
   return whisk.validate();
 }
 
@@ -137,6 +140,7 @@ bool ExploreLoop::newTouch(const Vec2& p) const {
 }
 
 int ExploreLoop::failGoal() {
+  given_up_.push_back(goal_->position());
   // Goals at one position (the grid's headings) count once: boxed in means positions.
   if (!last_failed_ || (last_failed_->position() - goal_->position()).norm() > 1e-9) ++failed_;
   last_failed_ = goal_;
@@ -170,7 +174,8 @@ Status ExploreLoop::decideAndPlan() {
   double ms = 0.0;
   const exploration::Decision d = exploration::decide(
       policy_, known_, options_.explore.planner, last_pose_, samples_, mounts_, model_, grid_,
-      report_.whisks, report_.travel_m, false, options_.waypoint_tolerance, rng_, &ms);
+      report_.whisks, report_.travel_m, false, options_.waypoint_tolerance, given_up_,
+      options_.give_up_radius, rng_, &ms);
   decision_total_ms_ += ms;
   ++decisions_;
   report_.decision_ms_max = std::max(report_.decision_ms_max, ms);

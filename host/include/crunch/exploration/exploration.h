@@ -75,7 +75,8 @@ Decision decide(ExplorePolicy& policy, const KnownSpace& known, const PlannerOpt
                 const Pose2& robot, std::span<const MapSample> samples,
                 const std::vector<WhiskerMount>& mounts, const ModelParams& model,
                 std::span<const Pose2> grid_poses, int whisks, double travel_m, bool teleport,
-                double arrival_tolerance, Rng& rng, double* decision_ms);
+                double arrival_tolerance, std::span<const Vec2> given_up,
+                double given_up_radius, Rng& rng, double* decision_ms);
 
 // The command line's --explore POLICY [--travel-budget M] [--whisk-budget N], shared by --sim and
 // --robot (each adds its own flags): nullopt without a policy; an Error naming the flag for an

@@ -57,7 +57,17 @@ struct ExploreState {
   // stands (ExploreLoop::Options::waypoint_tolerance; 0 teleporting): a candidate that close to
   // the pose just whisked, at its heading, is that whisk again.
   double arrival_tolerance = 0.0;
+  // Goals the driving loop gave up (not reached: no path, repeated bumps, out of time), and the
+  // radius about each within which no whisk pose is chosen (ExploreLoop::Options). The well-known
+  // frontier explorers' blacklist: a goal near one given up is approached the same way and fails
+  // the same way, so choosing it again boxes the robot in.
+  std::span<const Vec2> given_up{};
+  double given_up_radius = 0.0;
 };
+
+// Whether a policy may choose a whisk pose at `p`: the robot's centre may stand there, a path
+// reaches it, and it is not within given_up_radius of a goal given up.
+bool choosable(const ExploreState& s, const Vec2& p);
 
 struct Decision {
   std::optional<Pose2> goal;  // the next whisk pose; nullopt: stop

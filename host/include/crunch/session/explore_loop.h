@@ -28,6 +28,8 @@
 // Stop rules, checked before each decision and while driving: the travel budget (metres the
 // base's centre moved, translation only), the whisk budget, the policy's no-goal (its why), and
 // max_failed_goals goals in a row that could not be planned or reached in time (boxed in).
+// A goal given up is remembered: no later decision chooses a whisk pose within give_up_radius of
+// it (ExploreState::given_up), so the policy looks elsewhere instead of retrying the same gap.
 //
 // Driving: update() is called by the control loop at any rate; it reads base.now(), odometry()
 // and bumped(), never sleeps, and sends a command only when it changes.
@@ -67,6 +69,9 @@ class ExploreLoop {
     double record_every = 0.05;       // m between the path's recorded poses
     int max_failed_goals = 10;        // goal positions in a row not reached: boxed in
     int max_bumps_per_goal = 3;       // repeated bumps on the way to one goal: give it up
+    // m: no whisk pose is chosen this near a goal given up (ExploreState::given_up): the
+    // Create's diameter, so a goal approached through the same gap is not tried again.
+    double give_up_radius = 2.0 * kRobotRadius;
     std::uint64_t seed = 1;           // the policy's stream
     BodyWhisk::Options whisk;         // the in-place whisk
     Status validate() const;
@@ -140,6 +145,7 @@ class ExploreLoop {
   double deadline_ = 0.0;
   Pose2 last_pose_, recorded_, whisk_pose_, backoff_from_;
   int failed_ = 0;
+  std::vector<Vec2> given_up_;  // every goal given up, in order (ExploreState::given_up)
   int goal_bumps_ = 0;
   std::optional<Pose2> last_failed_;
   double decision_total_ms_ = 0.0;
