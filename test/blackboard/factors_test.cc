@@ -204,14 +204,47 @@ TEST_CASE("Factors: Delta_TL of a table of its own size, with the leg-width term
   CHECK(deltaTL(chair.pose, leg, p, nullptr) > 100.0);
 }
 
+TEST_CASE("Params: the catalog's term is the mixture's density over the uniform's, validated",
+          "[blackboard]") {
+  ModelParams p;  // catalog_weight 0.5, catalog_sigma 5 mm about the paper's 0.8 x 0.5 m
+  // 1 / U: the (longer, shorter) region's area, 0.7 * 1.7 - 0.7^2 / 2 = 0.945 m^2.
+  const double peak = std::log(0.5 + 0.5 * 0.945 / (2 * kPi * 0.005 * 0.005));
+  CHECK(p.logCatalogFactor(0.8, 0.5) == Approx(peak));
+  CHECK(p.logCatalogFactor(0.5, 0.8) == Approx(peak));  // either side may be the longer
+  CHECK(peak > 7.5);  // a table of the catalog's size earns what a fixed size deserves
+  // One sd off on each side: the Gaussian's exp(-1).
+  CHECK(p.logCatalogFactor(0.805, 0.495) ==
+        Approx(std::log(0.5 + 0.5 * 0.945 * std::exp(-1.0) / (2 * kPi * 0.005 * 0.005))));
+  // Far from it, the uniform's share alone: a chair or a desk pays log 2.
+  CHECK(p.logCatalogFactor(1.4, 0.7) == Approx(std::log(0.5)).margin(1e-12));
+  CHECK(p.logCatalogFactor(0.45, 0.45) == Approx(std::log(0.5)).margin(1e-12));
+  CHECK(p.logSizePrior(0.8, 0.5, 0.03) == Approx(peak));  // the leg side stays uniform
+  p.catalog_weight = 0.0;
+  CHECK(p.logCatalogFactor(0.8, 0.5) == 0.0);
+  CHECK(p.validate());
+  p.catalog_weight = 1.0;  // a model that knows only the catalog is the walls model
+  REQUIRE_FALSE(p.validate());
+  CHECK(p.validate().error().message.find("catalog_weight") != std::string::npos);
+  p.catalog_weight = -0.1;
+  CHECK_FALSE(p.validate());
+  p.catalog_weight = 0.5;
+  p.catalog_sigma = 0.0;
+  REQUIRE_FALSE(p.validate());
+  CHECK(p.validate().error().message.find("catalog_sigma") != std::string::npos);
+}
+
 TEST_CASE("Params: the size prior's range is validated, each field by name", "[blackboard]") {
   ModelParams p;
   CHECK(p.validate());
   // Inside the range: one constant, the Occam factor log(2 pi 2 sigma_r^2 / A) +
   // log(sqrt(2 pi) sigma_w / (leg_max - leg_min)), A = 0.7 * 1.7 - 0.7^2 / 2 = 0.945 m^2.
   const double inside = std::log(2 * kPi * 2 * 1e-4 / 0.945) + std::log(std::sqrt(2 * kPi) * 0.01 / 0.06);
-  CHECK(p.logSizePrior(1.4, 0.7, 0.05) == 0.0);  // size_occam off (the default): uniform
+  // size_occam off (the default): uniform, but for the catalog's term (the next test).
+  CHECK(p.logSizePrior(1.4, 0.7, 0.05) == p.logCatalogFactor(1.4, 0.7));
+  p.catalog_weight = 0.0;
+  CHECK(p.logSizePrior(1.4, 0.7, 0.05) == 0.0);
   ModelParams occam;
+  occam.catalog_weight = 0.0;
   occam.size_occam = true;
   CHECK(occam.logSizePrior(1.4, 0.7, 0.05) == Approx(inside));
   CHECK(occam.logSizePrior(0.45, 0.45, 0.03) == Approx(inside));

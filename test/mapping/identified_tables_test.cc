@@ -35,9 +35,11 @@ TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size, the
           "side leave its depth open and such a table is not reported",
           "[mapping][mapper]") {
   // The rooms model (issue 13): a table touched on the two legs of one side could have its other
-  // side anywhere nothing swept, so no size within 5 cm has a posterior above one half.
+  // side anywhere nothing swept, so no size within 5 cm has a posterior above one half. Without
+  // the catalog: with it, the catalog's size is fixed by the prior (the next test).
   ModelParams p;
   p.objects = ObjectModel::kRooms;
+  p.catalog_weight = 0.0;
   Blackboard board(p, 8, 64);
   const Pose2 pose{1.0, 1.0, 0.3};
   const int32_t id = board.addTable(pose, 0.8, 0.5, 0.05);
@@ -97,6 +99,56 @@ TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size, the
   CHECK(sizeCertainty(guessed, g, 0.10) < 0.2);
   CHECK(guessed.totalEnergy() == Approx(before_guessed).margin(1e-12));
   CHECK(guessed.leg(guessed.table(g).children[0]).pose.x == guessed.table(g).corner(0).x());
+}
+
+TEST_CASE("identifiedTablesOf, rooms model with the catalog: a table of the catalog's size on the "
+          "two legs of one side has its size fixed and its mirror image open, and is not reported",
+          "[mapping][mapper]") {
+  ModelParams p;
+  p.objects = ObjectModel::kRooms;
+  REQUIRE(p.catalog_weight > 0.0);
+  Blackboard board(p, 8, 64);
+  const int32_t id = tableWithLegs(board, {1.5, 1.5, 0.3}, {2, 3});
+  CHECK(sizeCertainty(board, id, 0.10) > 0.9);  // the prior's spike fixes the other side
+  const double mirror = placementCertainty(board, id);
+  INFO("placement " << mirror);
+  CHECK(mirror == Approx(0.5).margin(0.05));
+  std::vector<MapTable> out;
+  identifiedTablesOf(board, 0.10, out);
+  CHECK(out.empty());
+  // Three legs in an L fix both.
+  Blackboard three(p, 8, 64);
+  tableWithLegs(three, {1.5, 1.5, 0.3}, {0, 2, 3});
+  identifiedTablesOf(three, 0.10, out);
+  REQUIRE(out.size() == 1);
+  CHECK(out[0].width == Approx(0.8));
+}
+
+TEST_CASE("placementCertainty: a square top turned a quarter is the same object, not a rival",
+          "[mapping][mapper]") {
+  // A 0.45 m chair touched on three legs: its placements turned by pi/2 about the first touched
+  // leg put the same top over the same legs, and count as the chain's own.
+  ModelParams p;
+  p.objects = ObjectModel::kRooms;
+  Blackboard board(p, 8, 64);
+  const Pose2 pose{1.0, 1.0, 0.2};
+  const int32_t id = board.addTable(pose, 0.45, 0.45, 0.03);
+  for (int c = 0; c < 4; ++c) {
+    const Vec2 at = board.table(id).corner(c);
+    board.addLeg({at.x(), at.y(), wrapPeriod(pose.theta, kPi / 2)}, 0.03, id);
+    if (c == 1) continue;
+    Shapelet s;
+    s.x = at.x() + 0.015 * std::cos(pose.theta);
+    s.y = at.y() + 0.015 * std::sin(pose.theta);
+    s.oriented = false;
+    board.pushShapelet(s);
+  }
+  const double certain = placementCertainty(board, id);
+  INFO("placement " << certain);
+  CHECK(certain > 0.9);
+  std::vector<MapTable> out;
+  identifiedTablesOf(board, 0.10, out);
+  CHECK(out.size() == 1);
 }
 
 TEST_CASE("placementCertainty: three touched legs place a table of the one size, two legs of one "

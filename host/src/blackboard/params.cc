@@ -1,6 +1,7 @@
 #include "crunch/blackboard/params.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "crunch/core/range_check.h"
@@ -28,7 +29,8 @@ double ModelParams::logSizePrior(double width, double depth, double leg) const {
   const bool ok = lo >= size_min_side && lo <= size_max_short && hi <= size_max_long &&
                   legSideAllowed(leg) && 2.0 * leg < lo;
   if (!ok) return -std::numeric_limits<double>::infinity();
-  if (!size_occam) return 0.0;
+  const double catalog = logCatalogFactor(width, depth);
+  if (!size_occam) return catalog;
   // The Occam factor of a free size (Laplace's approximation of the marginal over it): the
   // posterior's volume over the prior's. Width and depth are each measured by two legs' centres
   // (sd sqrt(2) sigma_r_leg each, eq. 10): volume (sqrt(2 pi) sqrt(2) sigma_r_leg)^2; the leg
@@ -39,7 +41,23 @@ double ModelParams::logSizePrior(double width, double depth, double leg) const {
   const double area = std::max(a * b - 0.5 * a * a, 1e-12);
   const double wd = 2.0 * kPi * 2.0 * sigma_r_leg * sigma_r_leg;
   const double lv = std::sqrt(2.0 * kPi) * sigma_w;
-  return std::log(wd / area) + std::log(std::min(1.0, lv / std::max(leg_max - leg_min, 1e-12)));
+  return catalog + std::log(wd / area) +
+         std::log(std::min(1.0, lv / std::max(leg_max - leg_min, 1e-12)));
+}
+
+double ModelParams::logCatalogFactor(double width, double depth) const {
+  if (catalog_weight <= 0.0) return 0.0;
+  // The mixture's density over the uniform's: (1 - w) + w N / U. Both are over the (longer,
+  // shorter) sides, the region counted once as in the Occam factor above (w x d at theta is
+  // d x w at theta + pi/2), so 1 / U is that region's area.
+  const double lo = std::min(width, depth), hi = std::max(width, depth);
+  const double c_hi = std::max(table_width, table_depth), c_lo = std::min(table_width, table_depth);
+  const double a = size_max_short - size_min_side, b = size_max_long - size_min_side;
+  const double area = std::max(a * b - 0.5 * a * a, 1e-12);
+  const double s2 = catalog_sigma * catalog_sigma;
+  const double z = ((hi - c_hi) * (hi - c_hi) + (lo - c_lo) * (lo - c_lo)) / (2.0 * s2);
+  const double n_over_u = area * std::exp(-z) / (2.0 * kPi * s2);
+  return std::log((1.0 - catalog_weight) + catalog_weight * n_over_u);
 }
 
 Status ModelParams::validate() const {
@@ -74,7 +92,9 @@ Status ModelParams::validate() const {
       checkAbove("alpha_W", alpha_W, 0.0, 1e6),
       checkRange("wall_cost_per_m", wall_cost_per_m, 0.0, 1e3),
       checkRange("wall_min_length", wall_min_length, 0.001, 1.0),
-      checkAbove("wall_solid_depth", wall_solid_depth, 0.0, 1.0)};
+      checkAbove("wall_solid_depth", wall_solid_depth, 0.0, 1.0),
+      checkRange("catalog_weight", catalog_weight, 0.0, std::nextafter(1.0, 0.0)),
+      checkAbove("catalog_sigma", catalog_sigma, 0.0, 0.5)};
   for (const Status& s : checks) {
     if (!s) return s;
   }

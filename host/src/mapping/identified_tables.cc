@@ -161,6 +161,17 @@ void weighContactsAtTouchedLegs(const Blackboard& board, const Children& ch, Tou
       board.shapeletsNear(ch.pose[static_cast<size_t>(c)].position(), t.shapelets);
 }
 
+// Whether every corner of `a` stands within r of a corner of `b` (the same top, whichever way
+// its corners are numbered).
+bool sameFootprint(const TableHyp& a, const TableHyp& b, double r) {
+  for (int i = 0; i < 4; ++i) {
+    bool near = false;
+    for (int c = 0; c < 4 && !near; ++c) near = (a.corner(i) - b.corner(c)).norm() <= r;
+    if (!near) return false;
+  }
+  return true;
+}
+
 // The first child that is evidence, or -1.
 int firstTouched(const Children& ch) {
   for (int c = 0; c < ch.n; ++c)
@@ -198,9 +209,13 @@ double placementCertainty(Blackboard& board, int32_t id) {
   // The chain's own placement and the others, apart: their ratio decides a tie below.
   double log_now = -std::numeric_limits<double>::infinity(), log_others = log_now;
   const int own = ch.corner[static_cast<size_t>(first)];
+  const double r = board.params().cornerLinkRadius();
   scanPlacements(board, id, old, first, ch, t, [&](int turn, int k, double j) {
-    // The chain's own placement: the anchor at its corner, the axis unturned.
-    if (turn == 0 && k == own) log_now = j;
+    // The chain's own placement (the anchor at its corner, the axis unturned), and any other
+    // with the same footprint: a near-square top turned a quarter is the same object (the
+    // rooms model's chairs), not a rival.
+    if ((turn == 0 && k == own) || sameFootprint(board.table(id), old, r))
+      log_now = logAddExp(log_now, j);
     else log_others = logAddExp(log_others, j);
   });
   restore(board, id, old, ch);
@@ -263,7 +278,12 @@ void identifiedTablesOf(Blackboard& board, double tolerance, std::vector<MapTabl
   for (int32_t id = 0; id < board.tableExtent(); ++id) {
     if (!board.table(id).alive) continue;
     if (p.sized()) {
-      if (sizeCertainty(board, id, tolerance) > 0.5) out.push_back(sizedTable(board.table(id)));
+      // Its size and its place: a table of the catalog's size (ModelParams::catalog_weight) on
+      // the two legs of one side has a size the prior fixes and a mirror image the evidence may
+      // not tell apart, as under the walls model.
+      const double size = sizeCertainty(board, id, tolerance);
+      if (size > 0.5 && size * placementCertainty(board, id) > 0.5)
+        out.push_back(sizedTable(board.table(id)));
     } else if (!p.walled() || placementCertainty(board, id) > 0.5) {
       out.push_back(modelTable(board.table(id).pose, p));
     }

@@ -69,6 +69,15 @@ struct ModelParams {
   // unnormalised constants (c_L, alpha_L) the factor, about exp(-7.5), outweighs what a fully
   // seen four-legged table gains (about exp(+2.6); docs/BLACKBOARD.md), so no table survives.
   bool size_occam = false;
+  // The catalog (issue 13, "a prior over typical sizes"): the one table this model already knows
+  // (table_width x table_depth, the paper's) as a class inside the rooms model's range. With
+  // weight catalog_weight the size prior is the mixture (1 - w) U + w N, N a Gaussian of sd
+  // catalog_sigma on each side of the top about the catalog's (a maker's tolerance, not a fit),
+  // U the uniform above; the leg side stays uniform under both. A table of the catalog's size
+  // then earns the prior density its fixed size deserves, log(w N / U) ~ +8 nats at 5 mm, which
+  // a free size cannot: "model no more than a scene needs". 0 turns it off.
+  double catalog_weight = 0.5;
+  double catalog_sigma = 0.005;
   // Eq. 30: a parent or child farther than this many sigmas is treated as unrelated
   // (its density is below exp(-link_sigmas^2 / 1) ~ 1e-16 of the peak).
   double link_sigmas = 6.0;
@@ -107,7 +116,8 @@ struct ModelParams {
   // 0.05 <= size_min_side <= size_max_short <= size_max_long <= 10 m and
   // 0 < leg_min <= leg_max < size_min_side / 2 (four legs fit under the smallest top) (a leg
   // thinner than 2 free_margin has its centre point as its core); c_W, alpha_W as the other
-  // priors; wall_cost_per_m 0..1e3; wall_min_length 0.001..1 m; wall_solid_depth in (0, 1] m.
+  // priors; wall_cost_per_m 0..1e3; wall_min_length 0.001..1 m; wall_solid_depth in (0, 1] m;
+  // catalog_weight in [0, 1), catalog_sigma in (0, 0.5] m.
   // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 
@@ -137,10 +147,12 @@ struct ModelParams {
   }
   // log of the size prior's mass at (width, depth, leg): the uniform prior's density times the
   // volume the evidence pins a size to (the Occam factor of a free size; params.cc), constant
-  // inside the range, -infinity outside. A table of free size must explain more than one of
+  // inside the range, -infinity outside; plus, with the catalog, log((1 - w) + w N / U). A table of free size must explain more than one of
   // fixed size: with the defaults about three legs' worth of evidence (docs/BLACKBOARD.md).
   double logSizePrior(double width, double depth, double leg) const;
   bool legSideAllowed(double side) const { return side >= leg_min && side <= leg_max; }
+  // The catalog's term of logSizePrior alone (0 without a catalog).
+  double logCatalogFactor(double width, double depth) const;
   // Radius within which a shapelet can be caused by a leg (eq. 30).
   double shapeletLinkRadius() const {
     return 0.5 * maxLegSide() * std::sqrt(2.0) + link_sigmas * sigma_r_shapelet;

@@ -388,7 +388,9 @@ class Sampler {
   // depth with one corner's leg held fixed; a table's leg side (half the time with its legs'
   // sides, its outline held); a leg's side about its centre or a corner; and a parent for a leg
   // whose size comes from the legs and point contacts around it, its legs re-sided about their
-  // outer corners ("A leg's side, seen from outside").
+  // outer corners ("A leg's side, seen from outside"). With a catalog
+  // (ModelParams::catalog_weight > 0) half the parent proposals are proposeParent's, a table of
+  // the catalog's size ("The catalog: the table the model knows, inside the rooms model").
   void resizeTable(int32_t id, double beta);
   void tableLegSide(int32_t id, double beta);
   void legSide(int32_t id, double beta);
