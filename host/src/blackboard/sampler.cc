@@ -204,10 +204,11 @@ void Sampler::sweep(double beta) {
         if (sized && rng_.uniform() < 0.3) legSide(h.id, beta);
         else jitterLeg(h.id, beta);
       } else if (sized) {
-        // With a catalog, half the births are of its size: the walls model's birth, its 8
+        // With a catalog, half the time also a birth of its size: the walls model's, its 8
         // placements of the one size weighed by the legs at their corners.
-        if (bb_.params().catalog_weight > 0.0 && rng_.uniform() < 0.5) proposeParent(h.id, beta);
-        else proposeParentSized(h.id, beta);
+        proposeParentSized(h.id, beta);
+        if (bb_.params().catalog_weight > 0.0 && bb_.leg(h.id).alive && rng_.uniform() < 0.5)
+          proposeParent(h.id, beta);
       } else proposeParent(h.id, beta);
     }
   }

@@ -58,8 +58,8 @@ struct ModelParams {
   // The size prior of the rooms model (ObjectModel::kRooms, issue 13): a four-legged object's
   // top is uniform over the sides in [size_min_side, size_max_long] with the shorter side at most
   // size_max_short (chairs and stools ~0.3-0.6 m up to desks ~2.0 x 1.0 m), its leg side uniform
-  // in [leg_min, leg_max]. Uniform, not a mixture of classes: docs/BLACKBOARD.md ("Tables of any
-  // size") says why. Unused under kPaper, where every table is table_width x table_depth.
+  // in [leg_min, leg_max], mixed with the catalog below (docs/BLACKBOARD.md "Tables of any size",
+  // "The catalog"). Unused under kPaper, where every table is table_width x table_depth.
   double size_min_side = 0.30;
   double size_max_long = 2.00;
   double size_max_short = 1.00;

@@ -389,7 +389,7 @@ class Sampler {
   // sides, its outline held); a leg's side about its centre or a corner; and a parent for a leg
   // whose size comes from the legs and point contacts around it, its legs re-sided about their
   // outer corners ("A leg's side, seen from outside"). With a catalog
-  // (ModelParams::catalog_weight > 0) half the parent proposals are proposeParent's, a table of
+  // (ModelParams::catalog_weight > 0) half the legs also get proposeParent's proposal, a table of
   // the catalog's size ("The catalog: the table the model knows, inside the rooms model").
   void resizeTable(int32_t id, double beta);
   void tableLegSide(int32_t id, double beta);
