@@ -147,7 +147,8 @@ struct ModelParams {
   }
   // log of the size prior's mass at (width, depth, leg): the uniform prior's density times the
   // volume the evidence pins a size to (the Occam factor of a free size; params.cc), constant
-  // inside the range, -infinity outside; plus, with the catalog, log((1 - w) + w N / U). A table of free size must explain more than one of
+  // inside the range, -infinity outside; plus, with the catalog, log((1 - w) + w N / U)
+  // (logCatalogFactor). With size_occam a table of free size must explain more than one of
   // fixed size: with the defaults about three legs' worth of evidence (docs/BLACKBOARD.md).
   double logSizePrior(double width, double depth, double leg) const;
   bool legSideAllowed(double side) const { return side >= leg_min && side <= leg_max; }
