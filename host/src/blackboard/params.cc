@@ -8,6 +8,15 @@
 
 namespace crunch {
 
+namespace {
+// The size prior's (longer, shorter) region, counted once (w x d at theta is d x w at
+// theta + pi/2): (max_short - min)(max_long - min) - (max_short - min)^2 / 2.
+double sizeRegionArea(const ModelParams& p) {
+  const double a = p.size_max_short - p.size_min_side, b = p.size_max_long - p.size_min_side;
+  return std::max(a * b - 0.5 * a * a, 1e-12);
+}
+}  // namespace
+
 Result<ObjectModel> objectModelByName(const std::string& name) {
   if (name == "paper") return ObjectModel::kPaper;
   if (name == "walls") return ObjectModel::kWalls;
@@ -37,8 +46,7 @@ double ModelParams::logSizePrior(double width, double depth, double leg) const {
   // side by eq. 10's leg-width term: sqrt(2 pi) sigma_w. The prior's (width, depth) region
   // {min_side <= shorter <= max_short, longer <= max_long} is counted once (w x d at theta is
   // d x w at theta + pi/2), area (max_short - min)(max_long - min) - (max_short - min)^2 / 2.
-  const double a = size_max_short - size_min_side, b = size_max_long - size_min_side;
-  const double area = std::max(a * b - 0.5 * a * a, 1e-12);
+  const double area = sizeRegionArea(*this);
   const double wd = 2.0 * kPi * 2.0 * sigma_r_leg * sigma_r_leg;
   const double lv = std::sqrt(2.0 * kPi) * sigma_w;
   return catalog + std::log(wd / area) +
@@ -52,8 +60,7 @@ double ModelParams::logCatalogFactor(double width, double depth) const {
   // d x w at theta + pi/2), so 1 / U is that region's area.
   const double lo = std::min(width, depth), hi = std::max(width, depth);
   const double c_hi = std::max(table_width, table_depth), c_lo = std::min(table_width, table_depth);
-  const double a = size_max_short - size_min_side, b = size_max_long - size_min_side;
-  const double area = std::max(a * b - 0.5 * a * a, 1e-12);
+  const double area = sizeRegionArea(*this);
   const double s2 = catalog_sigma * catalog_sigma;
   const double z = ((hi - c_hi) * (hi - c_hi) + (lo - c_lo) * (lo - c_lo)) / (2.0 * s2);
   const double n_over_u = area * std::exp(-z) / (2.0 * kPi * s2);
