@@ -66,6 +66,14 @@ class GivenUpListPolicy final : public exploration::ExplorePolicy {
   ListPolicy list_;
 };
 
+// 120 contacts on a circle of radius r about c: a closed ring of occupied cells.
+void markRing(KnownSpace& known, const Vec2& c, double r) {
+  for (int i = 0; i < 120; ++i) {
+    const double a = 2 * kPi * i / 120;
+    known.markContact(c + r * Vec2(std::cos(a), std::sin(a)));
+  }
+}
+
 Scene room(std::vector<TableSpec> tables = {}) {
   Scene s;
   s.width = 4.0;
@@ -174,10 +182,7 @@ TEST_CASE("ExploreLoop: a goal given up is passed to every later decision", "[se
   sim::KinematicBase base(*world, {.start = {0.6, 0.6, 0.0}});
   KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
   // Goal 1 stands inside a ring of contacts: no path reaches it, so it is given up at once.
-  for (int i = 0; i < 120; ++i) {
-    const double a = 2 * kPi * i / 120;
-    known.markContact(Vec2(3.0, 2.0) + 0.3 * Vec2(std::cos(a), std::sin(a)));
-  }
+  markRing(known, {3.0, 2.0}, 0.3);
   GivenUpListPolicy policy({{3.0, 2.0, 0.0}, {1.2, 0.6, 0.0}});
   ExploreLoop::Options o;
   o.give_up_radius = 0.4;
@@ -204,10 +209,7 @@ TEST_CASE("ExploreLoop: a robot boxed in ends the run cleanly and says why", "[s
   sim::KinematicBase base(*world, {.start = {2.0, 1.5, 0.0}});
   KnownSpace known({0, 0}, {scene.width, scene.depth}, 0.05);
   // A ring of contacts 0.15 m around the robot: no cell it can reach is one it may stand on.
-  for (int i = 0; i < 120; ++i) {
-    const double a = 2 * kPi * i / 120;
-    known.markContact(Vec2(2.0, 1.5) + 0.15 * Vec2(std::cos(a), std::sin(a)));
-  }
+  markRing(known, {2.0, 1.5}, 0.15);
   auto policy = exploration::makeRandomPolicy(exploration::PolicyOptions{});
   ExploreLoop loop(base, known, *policy, defaultWhiskerArray(), ModelParams{}, {},
                    ExploreLoop::Options{}, {});
