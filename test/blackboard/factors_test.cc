@@ -233,6 +233,35 @@ TEST_CASE("Params: the catalog's term is the mixture's density over the uniform'
   CHECK(p.validate().error().message.find("catalog_sigma") != std::string::npos);
 }
 
+TEST_CASE("Params: over the sides the evidence fixes, the catalog's term integrates the others "
+          "out",
+          "[blackboard]") {
+  ModelParams p;
+  const double s = 0.005, a2 = 2 * 0.945;  // the (width, depth) region is mirrored: area 2 A
+  // Both sides fixed: the two-sided term, as before.
+  CHECK(p.logCatalogFactor(0.8, 0.5, true, true) == p.logCatalogFactor(0.8, 0.5));
+  // Neither: over a likelihood flat in both sides the mixture and the uniform integrate alike.
+  CHECK(p.logCatalogFactor(0.8, 0.5, false, false) == 0.0);
+  CHECK(p.logCatalogFactor(1.4, 0.7, false, false) == 0.0);
+  // One side at 0.8 m: the catalog's 1-D marginal there is half a Gaussian's peak (0.8 is its
+  // longer side, not its shorter); the uniform's is the depth range at that width, 1.7 m, over 2 A.
+  const double n1 = 0.5 / (std::sqrt(2 * kPi) * s);
+  const double one = std::log(0.5 + 0.5 * n1 * a2 / 1.7);
+  CHECK(p.logCatalogFactor(0.8, 0.5, true, false) == Approx(one));
+  CHECK(p.logCatalogFactor(0.8, 1.9, true, false) == Approx(one));  // the other side is free
+  CHECK(p.logCatalogFactor(0.3, 0.8, false, true) == Approx(one));
+  CHECK(p.logCatalogFactor(0.5, 0.8, true, false) == Approx(one));  // the shorter side alike
+  CHECK(one > 3.0);
+  CHECK(one < p.logCatalogFactor(0.8, 0.5) - 4.0);
+  // A fixed side far from both of the catalog's: the uniform's share alone, over either range
+  // (at 1.5 m, above the largest shorter side, the other side's range is 0.7 m).
+  CHECK(p.logCatalogFactor(0.65, 0.5, true, false) == Approx(std::log(0.5)).margin(1e-12));
+  CHECK(p.logCatalogFactor(1.5, 0.5, true, false) == Approx(std::log(0.5)).margin(1e-12));
+  // logSizePrior passes the sides on.
+  CHECK(p.logSizePrior(0.8, 0.5, 0.03, true, false) == Approx(one));
+  CHECK(p.logSizePrior(0.8, 0.5, 0.03, false, false) == 0.0);
+}
+
 TEST_CASE("Params: the size prior's range is validated, each field by name", "[blackboard]") {
   ModelParams p;
   CHECK(p.validate());

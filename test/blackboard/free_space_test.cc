@@ -35,6 +35,24 @@ TEST_CASE("FreeSpace: each ray counts once per cell, outside the grid is zero", 
   CHECK(g.rays() == 4);
 }
 
+TEST_CASE("FreeSpace: sweptNear sees a pass within its box only, and outside the room is known",
+          "[mapping]") {
+  FreeSpaceGrid g({0, 0}, {2, 2}, 0.01);
+  CHECK_FALSE(g.sweptNear({1.0, 1.0}, 0.1));  // nothing swept yet
+  g.addRay({{0.5, 1.0}, {0.9, 1.0}});         // a pass along y = 1 from x = 0.5 to 0.9
+  CHECK(g.sweptNear({0.7, 1.0}, 0.0));
+  CHECK(g.sweptNear({1.0, 1.0}, 0.12));        // 0.1 m past the ray's end
+  CHECK_FALSE(g.sweptNear({1.0, 1.0}, 0.05));
+  CHECK(g.sweptNear({0.7, 1.08}, 0.1));
+  CHECK_FALSE(g.sweptNear({0.7, 1.2}, 0.1));
+  CHECK_FALSE(g.sweptNear({0.7, 1.0}, -0.1));  // no box
+  CHECK_FALSE(g.sweptNear({std::nan(""), 1.0}, 0.1));
+  CHECK_FALSE(g.sweptNear({5.0, 5.0}, 0.1));  // off the grid, no room set: nothing known
+  g.setRoom({0.2, 0.2}, {1.8, 1.8});
+  CHECK(g.sweptNear({1.9, 1.0}, 0.01));  // outside the room: the room's bounds are evidence
+  CHECK_FALSE(g.sweptNear({1.5, 1.5}, 0.01));
+}
+
 namespace {
 
 // Adds `n` zero-length rays at the centre of cell (ix, iy): n passes through that cell alone.

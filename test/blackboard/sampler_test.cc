@@ -483,7 +483,11 @@ ModelParams roomsModel() {
 TEST_CASE("Rooms model: every move's local energy change equals the brute-force change, sizes "
           "and negative evidence included",
           "[blackboard]") {
-  const ModelParams p = roomsModel();
+  ModelParams p = roomsModel();
+  // The catalog over every side, or over the sides the evidence fixes (its term then changes
+  // with the contacts and passes near each corner).
+  p.catalog_fixed_sides = GENERATE(false, true);
+  INFO("catalog_fixed_sides " << p.catalog_fixed_sides);
   Blackboard bb(p, 32, 512);
   FreeSpaceGrid free({0, 0}, {4, 4});
   Rng rays(31);
@@ -524,6 +528,31 @@ TEST_CASE("Rooms model: every move's local energy change equals the brute-force 
   CHECK(sampler.stats().proposals > 1000);
   CHECK(sampler.stats().audit_max_error < 1e-9);
   CHECK(sampler.stats().audit_cache_max_error < 1e-9);  // every cached term is its fresh value
+}
+
+TEST_CASE("Rooms model: the catalog counts the sides whose both ends the evidence reaches",
+          "[blackboard]") {
+  // Two boards with one catalog-size table, the catalog over every side on one and over the
+  // fixed sides on the other: their log joints differ by the size terms alone.
+  ModelParams all = roomsModel(), fixed = roomsModel();
+  fixed.catalog_fixed_sides = true;
+  Blackboard a(all, 32, 64), b(fixed, 32, 64);
+  const Pose2 table{1.5, 1.5, 0.3};
+  for (Blackboard* bb : {&a, &b}) bb->addTable(table, 0.8, 0.5, 0.05);
+  const double both = all.logCatalogFactor(0.8, 0.5);
+  const double one = all.logCatalogFactor(0.8, 0.5, true, false);
+  // Nothing near any corner: nothing fixed.
+  CHECK(b.totalEnergy() - a.totalEnergy() == Approx(-both));
+  // Contacts off corners 0 and 1 (the width's ends): the width alone.
+  for (const auto& s : TableShapelets(table, all, {0, 1}))
+    for (Blackboard* bb : {&a, &b}) bb->pushShapelet(s);
+  CHECK(b.totalEnergy() - a.totalEnergy() == Approx(one - both));
+  // Whisker passes by corner 2 as well (negative evidence attached): the depth too, 1 to 2.
+  FreeSpaceGrid free({0, 0}, {3, 3});
+  const Vec2 c2 = table.toWorld(all.cornerOffset(2));
+  free.addRay({c2 + Vec2{0.06, -0.08}, c2 + Vec2{0.12, -0.08}});
+  for (Blackboard* bb : {&a, &b}) bb->setFreeSpace(&free);
+  CHECK(b.totalEnergy() - a.totalEnergy() == Approx(0.0).margin(1e-9));
 }
 
 TEST_CASE("Rooms model: annealing finds a chair's and a desk's size from their legs",

@@ -95,6 +95,16 @@ void Blackboard::shapeletsNear(const Vec2& p, ShapeletSet& out) const {
   });
 }
 
+bool Blackboard::shapeletNear(const Vec2& p) const {
+  const double r = shapelet_link_r_;
+  bool found = false;
+  shapelet_hash_.query(p, r, [&](int32_t slot) {
+    const Shapelet& s = wm_[static_cast<size_t>(slot)];
+    found = found || (Vec2{s.x, s.y} - p).squaredNorm() <= r * r;
+  });
+  return found;
+}
+
 // ---------------------------------------------------------------- hypotheses
 
 void Blackboard::setTablePose(TableHyp& t, const Pose2& pose) {
@@ -478,7 +488,22 @@ double Blackboard::tableFreeTerm(const TableHyp& table) const {
 }
 
 double Blackboard::tableSizeTerm(const TableHyp& t) const {
-  return p_.sized() ? p_.logSizePrior(t.width, t.depth, t.leg) : 0.0;
+  if (!p_.sized()) return 0.0;
+  if (p_.catalog_weight <= 0.0 || !p_.catalog_fixed_sides)
+    return p_.logSizePrior(t.width, t.depth, t.leg);
+  // The catalog counts a side only where the evidence bears on both ends of one of its two
+  // edges: a leg there would have caused a contact in working memory, or (with negative
+  // evidence) whiskers came within its link radius (eq. 30), where it would have been touched
+  // or ruled out. Corners 0 and 1 (and 3 and 2) span the width, 0 and 3 (and 1 and 2) the depth.
+  bool near[4];
+  const double reach = p_.shapeletLinkRadius();
+  for (int i = 0; i < 4; ++i) {
+    const Vec2 c = t.pose.toWorld(t.cornerOffset(i), t.trig.c, t.trig.s);
+    near[i] = shapeletNear(c) || (free_ && free_->sweptNear(c, reach));
+  }
+  const bool width_fixed = (near[0] && near[1]) || (near[3] && near[2]);
+  const bool depth_fixed = (near[0] && near[3]) || (near[1] && near[2]);
+  return p_.logSizePrior(t.width, t.depth, t.leg, width_fixed, depth_fixed);
 }
 
 double Blackboard::legSideTerm(const LegHyp& l) const {

@@ -227,6 +227,19 @@ int FreeSpaceGrid::maxInSquare(const Pose2& pose, double side, double margin) co
   return scanCore(pose, h, x0, y0, x1, y1, upper);
 }
 
+bool FreeSpaceGrid::sweptNear(const Vec2& p, double reach) const {
+  if (room_ && !(p.x() >= room_lo_.x() && p.x() <= room_hi_.x() && p.y() >= room_lo_.y() &&
+                 p.y() <= room_hi_.y()))
+    return true;
+  if (!(reach >= 0.0) || !std::isfinite(p.x()) || !std::isfinite(p.y())) return false;
+  const int x0 = std::max(0, static_cast<int>(std::floor((p.x() - reach - lo_.x()) / cell_)));
+  const int y0 = std::max(0, static_cast<int>(std::floor((p.y() - reach - lo_.y()) / cell_)));
+  const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((p.x() + reach - lo_.x()) / cell_)));
+  const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((p.y() + reach - lo_.y()) / cell_)));
+  if (x0 > x1 || y0 > y1) return false;
+  return boxMax(x0, y0, x1, y1) > 0;
+}
+
 int FreeSpaceGrid::scanCore(const Pose2& pose, double h, int x0, int y0, int x1, int y1,
                             int upper) const {
   // Pose2::toLocal's arithmetic with cos and sin taken once: the same bits per cell.

@@ -33,12 +33,13 @@ const char* objectModelName(ObjectModel m) {
   return "paper";
 }
 
-double ModelParams::logSizePrior(double width, double depth, double leg) const {
+double ModelParams::logSizePrior(double width, double depth, double leg, bool width_fixed,
+                                 bool depth_fixed) const {
   const double lo = std::min(width, depth), hi = std::max(width, depth);
   const bool ok = lo >= size_min_side && lo <= size_max_short && hi <= size_max_long &&
                   legSideAllowed(leg) && 2.0 * leg < lo;
   if (!ok) return -std::numeric_limits<double>::infinity();
-  const double catalog = logCatalogFactor(width, depth);
+  const double catalog = logCatalogFactor(width, depth, width_fixed, depth_fixed);
   if (!size_occam) return catalog;
   // The Occam factor of a free size (Laplace's approximation of the marginal over it): the
   // posterior's volume over the prior's. Width and depth are each measured by two legs' centres
@@ -53,17 +54,34 @@ double ModelParams::logSizePrior(double width, double depth, double leg) const {
          std::log(std::min(1.0, lv / std::max(leg_max - leg_min, 1e-12)));
 }
 
-double ModelParams::logCatalogFactor(double width, double depth) const {
-  if (catalog_weight <= 0.0) return 0.0;
-  // The mixture's density over the uniform's: (1 - w) + w N / U. Both are over the (longer,
-  // shorter) sides, the region counted once as in the Occam factor above (w x d at theta is
-  // d x w at theta + pi/2), so 1 / U is that region's area.
-  const double lo = std::min(width, depth), hi = std::max(width, depth);
+double ModelParams::logCatalogFactor(double width, double depth, bool width_fixed,
+                                     bool depth_fixed) const {
+  if (catalog_weight <= 0.0 || !(width_fixed || depth_fixed)) return 0.0;
+  // The mixture's marginal over the uniform's along the sides the evidence fixes, the others
+  // integrated out (over a likelihood flat in a side, both priors integrate to one):
+  // (1 - w) + w N / U. Both are over the (longer, shorter) sides, the region counted once as in
+  // the Occam factor above (w x d at theta is d x w at theta + pi/2), so 1 / U is that region's
+  // area A; in (width, depth) the region is mirrored (area 2 A) and the catalog is N's two
+  // mirror images at half weight each.
   const double c_hi = std::max(table_width, table_depth), c_lo = std::min(table_width, table_depth);
   const double area = sizeRegionArea(*this);
   const double s2 = catalog_sigma * catalog_sigma;
-  const double z = ((hi - c_hi) * (hi - c_hi) + (lo - c_lo) * (lo - c_lo)) / (2.0 * s2);
-  const double n_over_u = area * std::exp(-z) / (2.0 * kPi * s2);
+  double n_over_u;
+  if (width_fixed && depth_fixed) {
+    const double lo = std::min(width, depth), hi = std::max(width, depth);
+    const double z = ((hi - c_hi) * (hi - c_hi) + (lo - c_lo) * (lo - c_lo)) / (2.0 * s2);
+    n_over_u = area * std::exp(-z) / (2.0 * kPi * s2);
+  } else {
+    // One side x fixed, the other integrated out: the catalog's marginal density at x is the
+    // mean of two 1-D Gaussians (x is its longer or its shorter side); the uniform's is the
+    // length of the other side's range at x over 2 A.
+    const double x = width_fixed ? width : depth;
+    const double a = (x - c_hi) * (x - c_hi) / (2.0 * s2), b = (x - c_lo) * (x - c_lo) / (2.0 * s2);
+    const double n = 0.5 * (std::exp(-a) + std::exp(-b)) / std::sqrt(2.0 * kPi * s2);
+    const double other = x <= size_max_short ? size_max_long - size_min_side
+                                             : size_max_short - size_min_side;
+    n_over_u = n * 2.0 * area / std::max(other, 1e-12);
+  }
   return std::log((1.0 - catalog_weight) + catalog_weight * n_over_u);
 }
 

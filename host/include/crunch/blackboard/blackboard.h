@@ -121,6 +121,8 @@ class Blackboard {
   const Shapelet& shapelet(int slot) const { return wm_[static_cast<size_t>(slot)]; }
   // Adds to `out` the slots of shapelets a leg at `p` could cause (eq. 30).
   void shapeletsNear(const Vec2& p, ShapeletSet& out) const;
+  // Whether any shapelet in working memory is one a leg at `p` could cause (eq. 30).
+  bool shapeletNear(const Vec2& p) const;
 
   // ---- Hypotheses ----
   // Adds a table of the paper's one size (ModelParams::table_width ...).

@@ -80,6 +80,11 @@ class FreeSpaceGrid {
   // shrunk by `margin` on every side (its core: a ray grazing the outline does not count).
   // A core of half-side h = side / 2 - margin <= 0 is its centre point: count(pose.position()).
   int maxInSquare(const Pose2& pose, double side, double margin) const;
+  // Whether any ray passed through a cell the axis-aligned box [p - reach, p + reach]^2
+  // touches (outside the room, when one is set, always true: the room's bounds are evidence
+  // too; false for a non-finite p). The rooms model's catalog asks it of a table's corners: the
+  // evidence fixes a side's length only where whiskers came near both of its legs (params.h).
+  bool sweptNear(const Vec2& p, double reach) const;
 
   double cell() const { return cell_; }
   long long rays() const { return rays_; }
