@@ -130,6 +130,28 @@ TEST_CASE("Infogain: the goal whisked, and a pose within the loop's arrival tole
   }
 }
 
+TEST_CASE("Infogain: where the robot stopped short of a goal, without whisking, was not whisked",
+          "[exploration][infogain]") {
+  World w;
+  knownRoomWithTouchedLegs(w);
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
+  State s(w, {2.6, 2.6, 0.0});
+  s.state.whisks = 1;  // the robot whisked where it stands
+  InfogainPolicy policy(PolicyOptions{});
+  Rng rng(1);
+  const Decision d = policy.next(s.state, rng);
+  REQUIRE(d.goal);
+  // It drove towards the goal and stopped 4 cm short (a goal given up), whisking nothing: the
+  // disputed leg is as unsettled there as before.
+  const Pose2 stopped{d.goal->x - 0.04, d.goal->y, d.goal->theta};
+  State there(w, stopped);
+  there.state.whisks = 1;
+  policy.next(there.state, rng);
+  CHECK(policy.value(there.state, stopped).sample_bits == Approx(1.0));
+  // Where it whisked before still repeats that whisk.
+  CHECK(policy.value(there.state, {2.6, 2.6, 0.0}).score == 0.0);
+}
+
 TEST_CASE("Infogain: draws that agree are worth nothing, a known empty room stops the run",
           "[exploration][infogain]") {
   World w;

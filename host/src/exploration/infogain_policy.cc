@@ -378,10 +378,11 @@ CandidateValue InfogainPolicy::value(const ExploreState& state, const Pose2& pos
 }
 
 Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
-  // The pose just whisked (the robot stands where its last whisk began).
-  if (given.whisks > 0) whisked_.push_back(given.robot);
   just_whisked_.reset();
   if (given.whisks > whisks_seen_) {
+    // The pose just whisked: the robot stands where its last whisk began. Without a new whisk
+    // (a goal given up on the way) it stands where it stopped, which was not whisked.
+    whisked_.push_back(given.robot);
     just_whisked_ = given.robot;
     // The last goal was whisked at, within the loop's tolerance of it (or, rarely, a touch on
     // the way was whisked and the goal then given up: it is dropped all the same).
