@@ -535,6 +535,7 @@ TEST_CASE("Rooms model: the catalog counts the sides whose both ends the evidenc
   // Two boards with one catalog-size table, the catalog over every side on one and over the
   // fixed sides on the other: their log joints differ by the size terms alone.
   ModelParams all = roomsModel(), fixed = roomsModel();
+  all.catalog_fixed_sides = false;
   fixed.catalog_fixed_sides = true;
   Blackboard a(all, 32, 64), b(fixed, 32, 64);
   const Pose2 table{1.5, 1.5, 0.3};

@@ -102,26 +102,43 @@ TEST_CASE("sizeCertainty: legs at both ends of each side pin a table's size, the
 }
 
 TEST_CASE("identifiedTablesOf, rooms model with the catalog: a table of the catalog's size on the "
-          "two legs of one side has its size fixed and its mirror image open, and is not reported",
+          "two legs of one side is not reported, its other side or its mirror image open",
           "[mapping][mapper]") {
   ModelParams p;
   p.objects = ObjectModel::kRooms;
   REQUIRE(p.catalog_weight > 0.0);
-  Blackboard board(p, 8, 64);
+  // The catalog over the sides the evidence fixes (the default): nothing near corners 0 and 1,
+  // so the depth is the uniform's, free.
+  REQUIRE(p.catalog_fixed_sides);
+  {
+    Blackboard board(p, 8, 64);
+    const int32_t id = tableWithLegs(board, {1.5, 1.5, 0.3}, {2, 3});
+    CHECK(sizeCertainty(board, id, 0.10) < 0.2);
+    std::vector<MapTable> out;
+    identifiedTablesOf(board, 0.10, out);
+    CHECK(out.empty());
+  }
+  // The catalog over every side: the prior's spike fixes the other side, the mirror image stays.
+  ModelParams all = p;
+  all.catalog_fixed_sides = false;
+  Blackboard board(all, 8, 64);
   const int32_t id = tableWithLegs(board, {1.5, 1.5, 0.3}, {2, 3});
-  CHECK(sizeCertainty(board, id, 0.10) > 0.9);  // the prior's spike fixes the other side
+  CHECK(sizeCertainty(board, id, 0.10) > 0.9);
   const double mirror = placementCertainty(board, id);
   INFO("placement " << mirror);
   CHECK(mirror == Approx(0.5).margin(0.05));
   std::vector<MapTable> out;
   identifiedTablesOf(board, 0.10, out);
   CHECK(out.empty());
-  // Three legs in an L fix both.
-  Blackboard three(p, 8, 64);
-  tableWithLegs(three, {1.5, 1.5, 0.3}, {0, 2, 3});
-  identifiedTablesOf(three, 0.10, out);
-  REQUIRE(out.size() == 1);
-  CHECK(out[0].width == Approx(0.8));
+  // Three legs in an L fix both, either way.
+  for (const ModelParams& q : {p, all}) {
+    Blackboard three(q, 8, 64);
+    tableWithLegs(three, {1.5, 1.5, 0.3}, {0, 2, 3});
+    out.clear();
+    identifiedTablesOf(three, 0.10, out);
+    REQUIRE(out.size() == 1);
+    CHECK(out[0].width == Approx(0.8));
+  }
 }
 
 TEST_CASE("placementCertainty: a square top turned a quarter is the same object, not a rival",

@@ -308,7 +308,12 @@ bool Mapper::continueSamples(int n, double beta, int sweeps_between, std::vector
         static_cast<std::size_t>(sample_board_->workingMemoryCapacity()) < run.size()) {
       const int capacity = static_cast<int>(std::max<std::size_t>(256, 2 * run.size()));
       sample_sampler_.reset();
-      sample_board_ = std::make_unique<Blackboard>(options_.model, capacity, 4 * capacity + 64);
+      // The draws are posterior samples at beta = 1, where the catalog's density over a side
+      // nothing measures is right (its tiny volume balances it); only the annealed maps, whose
+      // cold end keeps densities but not volumes, count the fixed sides alone (params.h).
+      ModelParams draws = options_.model;
+      draws.catalog_fixed_sides = false;
+      sample_board_ = std::make_unique<Blackboard>(draws, capacity, 4 * capacity + 64);
       sample_board_->setFreeSpace(options_.negative_evidence ? &free_space_ : nullptr);
       sample_sampler_ = std::make_unique<Sampler>(*sample_board_, options_.sampler, sample_rng_);
       sample_fed_ = 0;

@@ -85,7 +85,7 @@ struct ModelParams {
   // size on empty floor and lifts its precision at 25 mm, but the exploring robot needs more
   // travel and sparse scenes keep more wall phantoms (docs/BLACKBOARD.md "The catalog over the
   // sides the evidence fixes").
-  bool catalog_fixed_sides = false;
+  bool catalog_fixed_sides = true;
   // Eq. 30: a parent or child farther than this many sigmas is treated as unrelated
   // (its density is below exp(-link_sigmas^2 / 1) ~ 1e-16 of the peak).
   double link_sigmas = 6.0;
