@@ -81,10 +81,10 @@ struct ModelParams {
   // Count the catalog's term only over the sides the evidence fixes (Blackboard::tableSizeTerm):
   // a side is fixed where contacts in working memory, or whisker passes (with negative
   // evidence), lie within a leg's link radius of both ends of one of its edges; the others are
-  // integrated out (logCatalogFactor). Off by default: measured, it halves the rooms model's
-  // size on empty floor and lifts its precision at 25 mm, but the exploring robot needs more
-  // travel and sparse scenes keep more wall phantoms (docs/BLACKBOARD.md "The catalog over the
-  // sides the evidence fixes").
+  // integrated out (logCatalogFactor). On for the maps, which are the cold end of an anneal and
+  // keep a density without its volume; the exploring robot's posterior draws (beta = 1, where
+  // the full density is right) turn it off (Mapper's sample board). docs/BLACKBOARD.md "The
+  // catalog over the sides the evidence fixes".
   bool catalog_fixed_sides = true;
   // Eq. 30: a parent or child farther than this many sigmas is treated as unrelated
   // (its density is below exp(-link_sigmas^2 / 1) ~ 1e-16 of the peak).
