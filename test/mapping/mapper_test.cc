@@ -597,6 +597,32 @@ TEST_CASE("Mapper::continueSamples: a slice of sweeps per call makes drawSamples
   CHECK(calls == 12);
 }
 
+TEST_CASE("Mapper::drawSamples: the draws weigh the rooms model's catalog over every side, "
+          "whatever the maps do", "[mapping][mapper]") {
+  // The draws are posterior samples at beta = 1, where the catalog's full density is the right
+  // target (docs/BLACKBOARD.md "The catalog over the sides the evidence fixes"): the same draws
+  // whether the maps count the fixed sides alone or every side.
+  const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
+  const Script script = tableScript(mounts);
+  const auto [lo, hi] = reach(script.poses, mounts);
+  auto draws = [&](bool fixed_sides) {
+    MappingOptions o = options(7, 0);
+    o.model.objects = ObjectModel::kRooms;
+    o.model.catalog_fixed_sides = fixed_sides;
+    Mapper m(mounts, lo, hi, o);
+    std::vector<MapSample> out;
+    for (std::size_t t = 0; t < script.poses.size(); ++t) {
+      m.addPose(script.poses[t], script.reports[t], script.rays[t]);
+      m.drawSamples(2, 1.0, 2, out);  // after every pose: tables seen on one, two, three legs
+    }
+    return out;
+  };
+  const std::vector<MapSample> every = draws(false), fixed = draws(true);
+  REQUIRE(every.size() == fixed.size());
+  REQUIRE_FALSE(every.empty());
+  for (std::size_t i = 0; i < every.size(); ++i) CHECK(sameSample(every[i], fixed[i]));
+}
+
 TEST_CASE("Mapper::drawSamples: drawing does not change the run's maps", "[mapping][mapper]") {
   const std::vector<WhiskerMount> mounts = defaultWhiskerArray();
   const Script script = tableScript(mounts);
