@@ -206,12 +206,10 @@ int FreeSpaceGrid::maxInSquare(const Pose2& pose, double side, double margin) co
   if (h <= 0) return count(pose.position());
   // The cells of the core's bounding box, as the reference scan (free_space_scan.h) takes them.
   const double reach = h * std::sqrt(2.0);
-  const Vec2 lo = pose.position() - Vec2{reach, reach}, hi = pose.position() + Vec2{reach, reach};
-  const int x0 = std::max(0, static_cast<int>(std::floor((lo.x() - lo_.x()) / cell_)));
-  const int y0 = std::max(0, static_cast<int>(std::floor((lo.y() - lo_.y()) / cell_)));
-  const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - lo_.x()) / cell_)));
-  const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - lo_.y()) / cell_)));
-  if (x0 > x1 || y0 > y1) return 0;
+  int x0, y0, x1, y1;
+  if (!cellBox(pose.position() - Vec2{reach, reach}, pose.position() + Vec2{reach, reach}, x0, y0,
+               x1, y1))
+    return 0;
   const int upper = boxMax(x0, y0, x1, y1);
   if (upper == 0) return 0;
   // The core, turned by any angle, holds the axis-aligned square of half-side h / sqrt(2) about
@@ -232,12 +230,18 @@ bool FreeSpaceGrid::sweptNear(const Vec2& p, double reach) const {
                  p.y() <= room_hi_.y()))
     return true;
   if (!(reach >= 0.0) || !std::isfinite(p.x()) || !std::isfinite(p.y())) return false;
-  const int x0 = std::max(0, static_cast<int>(std::floor((p.x() - reach - lo_.x()) / cell_)));
-  const int y0 = std::max(0, static_cast<int>(std::floor((p.y() - reach - lo_.y()) / cell_)));
-  const int x1 = std::min(nx_ - 1, static_cast<int>(std::floor((p.x() + reach - lo_.x()) / cell_)));
-  const int y1 = std::min(ny_ - 1, static_cast<int>(std::floor((p.y() + reach - lo_.y()) / cell_)));
-  if (x0 > x1 || y0 > y1) return false;
-  return boxMax(x0, y0, x1, y1) > 0;
+  int x0, y0, x1, y1;
+  return cellBox(p - Vec2{reach, reach}, p + Vec2{reach, reach}, x0, y0, x1, y1) &&
+         boxMax(x0, y0, x1, y1) > 0;
+}
+
+bool FreeSpaceGrid::cellBox(const Vec2& lo, const Vec2& hi, int& x0, int& y0, int& x1,
+                            int& y1) const {
+  x0 = std::max(0, static_cast<int>(std::floor((lo.x() - lo_.x()) / cell_)));
+  y0 = std::max(0, static_cast<int>(std::floor((lo.y() - lo_.y()) / cell_)));
+  x1 = std::min(nx_ - 1, static_cast<int>(std::floor((hi.x() - lo_.x()) / cell_)));
+  y1 = std::min(ny_ - 1, static_cast<int>(std::floor((hi.y() - lo_.y()) / cell_)));
+  return x0 <= x1 && y0 <= y1;
 }
 
 int FreeSpaceGrid::scanCore(const Pose2& pose, double h, int x0, int y0, int x1, int y1,

@@ -116,6 +116,9 @@ class FreeSpaceGrid {
   static const Tile kZeroTile;
 
   bool index(const Vec2& p, int& ix, int& iy) const;
+  // The cells [x0, x1] x [y0, y1] the box [lo, hi] touches, clamped to the grid; false when
+  // none.
+  bool cellBox(const Vec2& lo, const Vec2& hi, int& x0, int& y0, int& x1, int& y1) const;
   size_t tileOf(int ix, int iy) const {
     return static_cast<size_t>(iy >> kTileBits) * static_cast<size_t>(tiles_x_) +
            static_cast<size_t>(ix >> kTileBits);
