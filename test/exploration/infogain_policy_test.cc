@@ -47,6 +47,12 @@ void knownRoomWithTouchedLegs(World& w) {
   w.known.markContact({1.75, 1.5});
 }
 
+// knownRoomWithTouchedLegs, and 16 draws split 8:8 between the rival tables kNorth and kSouth.
+void knownRoomWithRivalDraws(World& w) {
+  knownRoomWithTouchedLegs(w);
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
+}
+
 bool reachesDisputedLeg(const Pose2& pose) {
   WhiskPredictor p(defaultWhiskerArray());
   std::vector<WhiskerContact> out;
@@ -67,8 +73,7 @@ bool reachesDisputedLeg(const Pose2& pose) {
 TEST_CASE("Infogain: rival tables send the robot to touch a disputed leg (Fig. 7)",
           "[exploration][infogain]") {
   World w;
-  knownRoomWithTouchedLegs(w);
-  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
+  knownRoomWithRivalDraws(w);
   State s(w, {2.6, 2.6, 0.0});
   InfogainPolicy policy(PolicyOptions{});
   Rng rng(1);
@@ -94,8 +99,7 @@ TEST_CASE("Infogain: the goal whisked, and a pose within the loop's arrival tole
   // stands. If the draws still disagree there (the whisk settled nothing they dispute), the
   // same goal, or one beside the robot, would win again and again with the robot never moving.
   World w;
-  knownRoomWithTouchedLegs(w);
-  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
+  knownRoomWithRivalDraws(w);
   State s(w, {2.6, 2.6, 0.0});
   Rng rng(1);
   for (const double tolerance : {0.0, 0.05}) {
@@ -133,8 +137,7 @@ TEST_CASE("Infogain: the goal whisked, and a pose within the loop's arrival tole
 TEST_CASE("Infogain: where the robot stopped short of a goal, without whisking, was not whisked",
           "[exploration][infogain]") {
   World w;
-  knownRoomWithTouchedLegs(w);
-  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : kSouth}, {}, {}});
+  knownRoomWithRivalDraws(w);
   State s(w, {2.6, 2.6, 0.0});
   s.state.whisks = 1;  // the robot whisked where it stands
   InfogainPolicy policy(PolicyOptions{});

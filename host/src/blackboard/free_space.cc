@@ -199,9 +199,7 @@ void FreeSpaceGrid::setRoom(const Vec2& lo, const Vec2& hi) {
 }
 
 int FreeSpaceGrid::maxInSquare(const Pose2& pose, double side, double margin) const {
-  if (room_ && !(pose.x >= room_lo_.x() && pose.x <= room_hi_.x() && pose.y >= room_lo_.y() &&
-                 pose.y <= room_hi_.y()))
-    return std::numeric_limits<uint16_t>::max();
+  if (outsideRoom(pose.x, pose.y)) return std::numeric_limits<uint16_t>::max();
   const double h = 0.5 * side - margin;
   if (h <= 0) return count(pose.position());
   // The cells of the core's bounding box, as the reference scan (free_space_scan.h) takes them.
@@ -226,9 +224,7 @@ int FreeSpaceGrid::maxInSquare(const Pose2& pose, double side, double margin) co
 }
 
 bool FreeSpaceGrid::sweptNear(const Vec2& p, double reach) const {
-  if (room_ && !(p.x() >= room_lo_.x() && p.x() <= room_hi_.x() && p.y() >= room_lo_.y() &&
-                 p.y() <= room_hi_.y()))
-    return true;
+  if (outsideRoom(p.x(), p.y())) return true;
   if (!(reach >= 0.0) || !std::isfinite(p.x()) || !std::isfinite(p.y())) return false;
   int x0, y0, x1, y1;
   return cellBox(p - Vec2{reach, reach}, p + Vec2{reach, reach}, x0, y0, x1, y1) &&

@@ -119,6 +119,11 @@ class FreeSpaceGrid {
   // The cells [x0, x1] x [y0, y1] the box [lo, hi] touches, clamped to the grid; false when
   // none.
   bool cellBox(const Vec2& lo, const Vec2& hi, int& x0, int& y0, int& x1, int& y1) const;
+  // Whether a room is set and p lies outside it (setRoom).
+  bool outsideRoom(double x, double y) const {
+    return room_ &&
+           !(x >= room_lo_.x() && x <= room_hi_.x() && y >= room_lo_.y() && y <= room_hi_.y());
+  }
   size_t tileOf(int ix, int iy) const {
     return static_cast<size_t>(iy >> kTileBits) * static_cast<size_t>(tiles_x_) +
            static_cast<size_t>(ix >> kTileBits);
