@@ -110,6 +110,16 @@ TEST_CASE("Live view: --sim --serve serves state.json and events as the run goes
   for (std::size_t i = 0; i < events.size(); ++i) {
     const json& e = events[i];
     if (i > 0) CHECK(e["seq"] > events[i - 1]["seq"]);
+    INFO("event " << i << ": " << e.dump().substr(0, 400));
+    // The contract (live_state.h): [x, y, theta], or null before the run has a pose, in the
+    // snapshot published as it starts (seq 1, t 0, no path yet). A client that subscribes at
+    // once receives it; on a loaded machine the test's client sometimes does.
+    if (e["pose"].is_null()) {
+      CHECK(e["seq"] == 1);
+      CHECK(e["t"] == 0.0);
+      CHECK(e["path"].empty());
+      continue;
+    }
     REQUIRE(e["pose"].is_array());
     CHECK(e["pose"].size() == 3);
     if (e["counters"].contains("whisks")) {
