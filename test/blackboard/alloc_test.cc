@@ -125,7 +125,8 @@ TEST_CASE("Sampler: anneal() with walls (--model walls) performs no heap allocat
   opt.wall_birth_rate = 0.5;
   opt.acceptance = acceptance;
   Sampler sampler(bb, opt, rng);
-  // Contacts along two walls (births, extends, merges, splits) and a table beside one.
+  // Contacts along two walls of a corner (births, extends, joins, merges, splits) and a table
+  // beside one.
   std::vector<Shapelet> stream;
   for (int round = 0; round < 3; ++round) {
     for (int k = 0; k < 40; ++k) {

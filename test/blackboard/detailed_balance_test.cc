@@ -325,10 +325,11 @@ TEST_CASE("Reversible jump: wall births, deaths and steps sample P(wall) exactly
   // Seven contacts along one face (x 0.3..0.9 at y = 0.4, sensed from +y), the walls model,
   // only the wall kernels: birth around the contacts' fitted segment or death, and the
   // symmetric steps (jitterWall, extendWall). c_W is made small so that no wall and one wall
-  // are both likely at beta = 1.
+  // are both likely at beta = 1 (8e-12: the lone wall's two free ends cost
+  // 2 log(p_wall_end_free / (1 - p_wall_end_free)) = -2.77 nats, which c_W makes up).
   ModelParams p;
   p.objects = ObjectModel::kWalls;
-  p.c_W = 5e-13;
+  p.c_W = 8e-12;
   const Vec2 a0{0.3, 0.4}, b0{0.9, 0.4};
   const std::vector<Shapelet> contacts = faceShapelets(a0, b0, 0.1);
   const SamplerOptions opt = rjOptions({0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0});

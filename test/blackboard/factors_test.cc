@@ -297,4 +297,10 @@ TEST_CASE("Params: the size prior's range is validated, each field by name", "[b
   CHECK(bad([](ModelParams& q) { q.leg_min = -0.01; }).find("leg_min") != std::string::npos);
   CHECK(bad([](ModelParams& q) { q.leg_max = 0.2; }).find("leg_max") != std::string::npos);
   CHECK(bad([](ModelParams& q) { q.leg_max = 0.01; }).find("leg_max") != std::string::npos);
+  // A free wall end no likelier than a joined one (0.5: the term is off); 0 would be -inf.
+  CHECK(bad([](ModelParams& q) { q.p_wall_end_free = 0.0; }).find("p_wall_end_free") !=
+        std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.p_wall_end_free = 0.6; }).find("p_wall_end_free") !=
+        std::string::npos);
+  CHECK(bad([](ModelParams& q) { q.p_wall_end_free = 0.5; }).empty());
 }

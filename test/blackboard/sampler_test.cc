@@ -252,6 +252,9 @@ TEST_CASE("Sampler: reversible-jump options are validated, acceptance names roun
   o.side_prior_draws = 1.0;
   CHECK(o.validate());
   o = {};
+  o.wall_join_reach = -0.1;
+  CHECK(o.validate().error().message.find("wall_join_reach") != std::string::npos);
+  o = {};
   o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 1, 0};  // walls' births alone: a valid (walls model) mix
   CHECK(o.validate());
   for (Acceptance a : {Acceptance::kTempered, Acceptance::kLiteral, Acceptance::kReversibleJump})

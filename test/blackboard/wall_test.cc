@@ -104,9 +104,11 @@ TEST_CASE("Blackboard: a wall joins the shapelets' noisy-OR and pays its prior a
   const double e0 = bb.totalEnergy();
   const int32_t id = bb.addWall({0.5, 0.5}, {1.5, 0.5});
   const double gain = bb.totalEnergy() - e0;
-  // 21 shapelets each go from log c_S to log(c_S + alpha_W); the wall costs its odds and 1 m.
+  // 21 shapelets each go from log c_S to log(c_S + alpha_W); the wall costs its odds, 1 m,
+  // and both its ends, which meet no other wall (log(p/(1-p)) each, p = p_wall_end_free).
   const double expect = 21 * (std::log(p.c_S + p.alpha_W) - std::log(p.c_S)) +
-                        logPresenceOdds(std::log(p.c_W), p) - p.wall_cost_per_m * 1.0;
+                        logPresenceOdds(std::log(p.c_W), p) - p.wall_cost_per_m * 1.0 +
+                        2 * p.logFreeWallEnd();
   CHECK(gain == Approx(expect).epsilon(1e-9));
   // A table behind the surface (its top in the wall's solid) is charged eps_b; one standing
   // against its free face is not, nor one beyond a wall 2 cm thick.
@@ -134,6 +136,53 @@ TEST_CASE("Blackboard: a wall joins the shapelets' noisy-OR and pays its prior a
   CHECK(beyond == Approx(in_front));
   bb.killWall(id);
   CHECK(bb.liveWalls() == 0);
+}
+
+TEST_CASE("Blackboard: a wall's end meeting another wall at a junction's angle is joined, a "
+          "collinear piece's is not",
+          "[blackboard]") {
+  // Walls end at walls (params.h p_wall_end_free, docs/BLACKBOARD.md): each end that no other
+  // live wall's segment passes within wallLinkRadius() of, at kWallJunctionAngle or more,
+  // adds log(p / (1 - p)); a joined end adds nothing.
+  const ModelParams p = rooms();
+  const double free_end = p.logFreeWallEnd(), odds = logPresenceOdds(std::log(p.c_W), p);
+  CHECK(free_end == Approx(std::log(0.2 / 0.8)));
+  Blackboard bb(p, 8, 64);
+  const double e0 = bb.totalEnergy();
+  bb.addWall({0, 0}, {1, 0});
+  const double e1 = bb.totalEnergy();
+  CHECK(e1 - e0 == Approx(odds - p.wall_cost_per_m + 2 * free_end));
+  // A second wall's whole change, its own terms less its odds and length.
+  const auto ends = [&](const Vec2& a, const Vec2& b) {
+    const int32_t id = bb.addWall(a, b);
+    const double gain = bb.totalEnergy() - e1 - odds + p.wall_cost_per_m * (b - a).norm();
+    bb.killWall(id);
+    bb.releaseWall(id);
+    return gain;
+  };
+  // A corner: the new wall's first end and the old wall's far end are both joined.
+  CHECK(ends({1, 0}, {1, 1}) == Approx(0.0).margin(1e-12));
+  // A T: only the new wall's end on the old wall's middle is joined.
+  CHECK(ends({0.5, 0}, {0.5, 1}) == Approx(free_end));
+  // Collinear pieces are one wall in two, not a junction: all four ends stay free.
+  CHECK(ends({1.1, 0}, {2, 0}) == Approx(2 * free_end));
+  CHECK(ends({0.9, 0.002}, {2, 0.002}) == Approx(2 * free_end));
+  // The junction's angle: 40 degrees off the old wall is none, 50 degrees is a corner.
+  const double d40 = 40 * kPi / 180, d50 = 50 * kPi / 180;
+  CHECK(ends({1, 0}, {1 + std::cos(d40), std::sin(d40)}) == Approx(2 * free_end));
+  CHECK(ends({1, 0}, {1 + std::cos(d50), std::sin(d50)}) == Approx(0.0).margin(1e-12));
+  // Within the link radius of the other segment, and beyond it.
+  const double r = p.wallLinkRadius();
+  CHECK(ends({0.5, 0.9 * r}, {0.5, 1}) == Approx(free_end));
+  CHECK(ends({0.5, 1.1 * r}, {0.5, 1}) == Approx(2 * free_end));
+  CHECK(ends({1 + 0.9 * r, 0}, {1 + 0.9 * r, 1}) == Approx(0.0).margin(1e-12));
+  // p_wall_end_free = 0.5: an end's state costs nothing (the walls without this term).
+  ModelParams even = p;
+  even.p_wall_end_free = 0.5;
+  Blackboard flat(even, 8, 64);
+  const double f0 = flat.totalEnergy();
+  flat.addWall({0, 0}, {1, 0});
+  CHECK(flat.totalEnergy() - f0 == Approx(odds - p.wall_cost_per_m));
 }
 
 TEST_CASE("Blackboard: a wall's negative evidence is its pieces' passes through both sides, capped",
@@ -291,6 +340,49 @@ TEST_CASE("Sampler: contacts along a wall become a wall, not a table", "[blackbo
     const bool horizontal = std::abs(wrapPeriod(w.angle(), kPi)) < 0.05;
     const bool vertical = std::abs(std::abs(wrapPeriod(w.angle(), kPi)) - kPi / 2) < 0.05;
     CHECK((horizontal || vertical));
+  }
+}
+
+TEST_CASE("Sampler: walls felt short of their corner are joined at it, and end at their "
+          "contacts without the junction prior",
+          "[blackboard]") {
+  // Two walls of a room's corner at (0.3, 0.3), each touched only up to 0.25 m from it (a
+  // whisker cannot feel into a corner). Joining costs 2 x 0.25 m of wall (1 nat) and gains two
+  // joined ends (2 |log(0.2 / 0.8)| = 2.77 nats): the annealed walls meet (joinWallEnd carries
+  // both ends to the lines' crossing; the cost per metre then draws each back to within the
+  // link radius, 6 cm, of the other wall: measured 0.32-0.35 m on seeds 3-5). With
+  // p_wall_end_free = 0.5 nothing pays for the 0.25 m, and each wall ends near its last contact
+  // (measured 0.54-0.56 m).
+  const double p_free = GENERATE(0.2, 0.5);
+  const uint64_t seed = crunch::testing::kUnderAsan ? 4 : GENERATE(3, 4, 5);
+  INFO("p_wall_end_free " << p_free << " seed " << seed);
+  ModelParams p = rooms();
+  p.p_wall_end_free = p_free;
+  Blackboard bb(p, 256, 256);
+  for (const Shapelet& s : wallShapelets({0.55, 0.3}, {1.8, 0.3}, 0.04, 0.003)) bb.pushShapelet(s);
+  for (const Shapelet& s : wallShapelets({0.3, 1.8}, {0.3, 0.55}, 0.04, 0.003)) bb.pushShapelet(s);
+  Rng rng(seed);
+  SamplerOptions opt;
+  opt.sweeps_per_temperature = 8;  // as the global inference's chains (--global-sweeps)
+  Sampler sampler(bb, opt, rng);
+  sampler.anneal();
+  std::vector<WallHyp> walls;
+  sampler.mapWalls(walls);
+  REQUIRE(walls.size() >= 2);
+  double lo_x = 1e9, lo_y = 1e9;  // the horizontal walls' least x, the vertical ones' least y
+  for (const WallHyp& w : walls) {
+    const bool horizontal = std::abs(wrapPeriod(w.angle(), kPi)) < 0.05;
+    REQUIRE((horizontal || std::abs(std::abs(wrapPeriod(w.angle(), kPi)) - kPi / 2) < 0.05));
+    if (horizontal) lo_x = std::min({lo_x, w.a.x(), w.b.x()});
+    else lo_y = std::min({lo_y, w.a.y(), w.b.y()});
+  }
+  INFO("least x " << lo_x << " least y " << lo_y);
+  if (p_free < 0.5) {
+    CHECK(std::abs(lo_x - 0.3) < p.wallLinkRadius());
+    CHECK(std::abs(lo_y - 0.3) < p.wallLinkRadius());
+  } else {
+    CHECK(lo_x > 0.45);
+    CHECK(lo_y > 0.45);
   }
 }
 

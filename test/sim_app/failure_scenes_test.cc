@@ -266,10 +266,12 @@ TEST_CASE("Failure scenes: thin-legged chairs, rooms model", "[app][scenes]") {
   // faces and nothing fixes its side, and a leg born too wide (its side drawn from the prior)
   // cannot join a table of thin legs. Mapped with `--model rooms` (the paper's model has one
   // size), with half the leg-side steps drawn from the prior (SamplerOptions::side_prior_draws
-  // 0.5; docs/BLACKBOARD.md "A leg's side, seen from outside"). Measured (seeds 1-5): recall 0.5,
-  // 1.0, 0.5, 1.0, 0.5, precision 1.0, no phantoms; with local side steps only (the default):
-  // 0 on seeds 1-6 and 0.5 on seed 7. Bounds over seeds 1-3: at least 3 of the 6 objects (one
-  // fewer than measured), no phantom on any seed.
+  // 0.5; docs/BLACKBOARD.md "A leg's side, seen from outside"). Measured (seeds 1-12, since walls
+  // end at walls, 2026-12-02): recall 0.5, 0.5, 0, 0, 0.5, 0.5, 0.5, 0, 0.5, 1, 1, 1 (mean 0.50;
+  // before, 0.58: the arena's joined corners change every chain's draws, and which seeds find a
+  // chair moved), precision 1.0, no phantoms; with local side steps only (the default) mean 0.10
+  // over seeds 1-5 (tools/scene-table.py). Bounds over seeds 1-3: at least 1 of the 6 objects
+  // (one fewer than measured), no phantom on any seed.
   int found = 0;
   for (uint64_t seed = 1; seed <= 3; ++seed) {
     const Outcome o = runScene("thin_legs", ObjectModel::kRooms, seed, 0.5);
@@ -280,5 +282,5 @@ TEST_CASE("Failure scenes: thin-legged chairs, rooms model", "[app][scenes]") {
     CHECK(a.at("phantoms_elsewhere").get<int>() == 0);
     found += static_cast<int>(std::lround(a.at("recall").get<double>() * 2));
   }
-  CHECK(found >= 3);
+  CHECK(found >= 1);
 }

@@ -49,6 +49,7 @@ Blackboard::Blackboard(const ModelParams& params, int working_memory, size_t res
                  params.walled() ? 8 : 0),
       slot_stamp_(static_cast<size_t>(working_memory), 0),
       wall_odds_(logPresenceOdds(std::log(params.c_W), params)),
+      log_free_wall_end_(params.walled() ? params.logFreeWallEnd() : 0.0),
       slot_term_(static_cast<size_t>(working_memory), 0.0),
       slot_gen_(static_cast<size_t>(working_memory), 0) {
   assert(working_memory > 0);
@@ -455,6 +456,51 @@ double Blackboard::wallTerms(int32_t id, const Touched& t) const {
   return e;
 }
 
+bool Blackboard::wallEndJoined(const Vec2& e, int32_t self) const {
+  const double r = wall_link_r_;
+  const double th = walls_[self].angle();
+  bool joined = false;
+  wallsNear(e, r, [&](int32_t o) {
+    if (joined || o == self) return;
+    const WallHyp& w = walls_[o];
+    joined = w.alive && distanceToSegment(e, w.a, w.b) <= r &&
+             lineAngleDiff(w.angle(), th) >= kWallJunctionAngle;
+  });
+  return joined;
+}
+
+double Blackboard::wallEndTerms(int32_t id) const {
+  const WallHyp& w = walls_[id];
+  if (!w.alive || log_free_wall_end_ == 0.0) return 0.0;
+  return (wallEndJoined(w.a, id) ? 0.0 : log_free_wall_end_) +
+         (wallEndJoined(w.b, id) ? 0.0 : log_free_wall_end_);
+}
+
+double Blackboard::touchedWallEndTerms(const Touched& t) const {
+  if (log_free_wall_end_ == 0.0) return 0.0;
+  double e = 0.0;
+  for (int32_t id : t.walls.span()) e += wallEndTerms(id);
+  for (int32_t id : t.wall_ends.span())
+    if (!t.walls.contains(id)) e += wallEndTerms(id);
+  return e;
+}
+
+void Blackboard::touchWallEnds(Touched& t, const Vec2& a, const Vec2& b) const {
+  if (log_free_wall_end_ == 0.0) return;
+  const double r = wall_link_r_, len = (b - a).norm();
+  // Points along a..b no further apart than a hash step: every point within r of the segment
+  // is within r + half a step of one of them.
+  const int n = std::max(1, static_cast<int>(std::ceil(len / kWallHashStep)));
+  for (int k = 0; k <= n; ++k) {
+    const Vec2 q = a + (b - a) * (static_cast<double>(k) / n);
+    wallsNear(q, r + 0.5 * len / n, [&](int32_t o) {
+      const WallHyp& w = walls_[o];
+      if (w.alive && (distanceToSegment(w.a, a, b) <= r || distanceToSegment(w.b, a, b) <= r))
+        t.wall_ends.add(o);
+    });
+  }
+}
+
 void Blackboard::clear() {
   ++gen_;
   walls_.reset();
@@ -619,7 +665,7 @@ double Blackboard::localEnergy(const Touched& t) const {
   for (int32_t id : t.legs.span()) e += legTerms(id, t);
   for (int32_t slot : t.shapelets.span()) e += shapeletTerm(slot);
   for (int32_t id : t.walls.span()) e += wallTerms(id, t);
-  return e;
+  return e + touchedWallEndTerms(t);
 }
 
 double Blackboard::localEnergy(const Touched& t, std::span<const int32_t> more_shapelets) const {
@@ -660,7 +706,7 @@ double Blackboard::cachedShapeletTerm(int slot) {
 }
 
 double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more) {
-  if (t.shapelets.overflowed) {
+  if (t.shapelets.overflowed || t.wall_ends.overflowed) {
     ++blanket_overflows_;
     return std::numeric_limits<double>::infinity();
   }
@@ -678,6 +724,7 @@ double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more)
   for (int32_t slot : t.shapelets.span())
     if (wm_used_[static_cast<size_t>(slot)]) e += cachedShapeletTerm(slot);
   for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  e += touchedWallEndTerms(t);
   for (int32_t slot : more)
     if (wm_used_[static_cast<size_t>(slot)]) e += cachedShapeletTerm(slot);
   return e;
@@ -686,7 +733,8 @@ double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more)
 double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) {
   n_kept_tables_ = n_kept_legs_ = 0;
   kept_slots_.clear();
-  if (t.shapelets.overflowed) return -std::numeric_limits<double>::infinity();
+  if (t.shapelets.overflowed || t.wall_ends.overflowed)
+    return -std::numeric_limits<double>::infinity();
   if (!incremental_) return localEnergy(t, more);
   double e = 0.0;
   for (int32_t id : t.tables.span()) {
@@ -710,6 +758,7 @@ double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) 
   };
   for (int32_t slot : t.shapelets.span()) e += keep(slot);
   for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  e += touchedWallEndTerms(t);
   for (int32_t slot : more) e += keep(slot);
   return e;
 }
@@ -804,6 +853,17 @@ double Blackboard::totalEnergy() const {
     const WallHyp& w = walls_[i];
     if (!w.alive) continue;
     e += wall_odds_ - p_.wall_cost_per_m * w.length() + wallFreeTerm(w.a, w.b);
+    // Walls end at walls: each end that no other wall's segment passes near at an angle.
+    for (const Vec2& end : {w.a, w.b}) {
+      bool joined = false;
+      for (int32_t j = 0; j < walls_.extent(); ++j) {
+        const WallHyp& o = walls_[j];
+        joined = joined || (j != i && o.alive &&
+                            distanceToSegment(end, o.a, o.b) <= p_.wallLinkRadius() &&
+                            lineAngleDiff(o.angle(), w.angle()) >= kWallJunctionAngle);
+      }
+      if (!joined) e += p_.logFreeWallEnd();
+    }
     for (int32_t j = 0; j < tables_.extent(); ++j)
       if (tables_[j].alive && inWallSolid(tableRect(tables_[j]), w)) e += log_eps_b_;
     for (int32_t j = 0; j < legs_.extent(); ++j)

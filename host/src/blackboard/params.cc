@@ -118,6 +118,7 @@ Status ModelParams::validate() const {
       checkRange("wall_cost_per_m", wall_cost_per_m, 0.0, 1e3),
       checkRange("wall_min_length", wall_min_length, 0.001, 1.0),
       checkAbove("wall_solid_depth", wall_solid_depth, 0.0, 1.0),
+      checkAbove("p_wall_end_free", p_wall_end_free, 0.0, 0.5),
       checkRange("catalog_weight", catalog_weight, 0.0, std::nextafter(1.0, 0.0)),
       checkAbove("catalog_sigma", catalog_sigma, 0.0, 0.5)};
   for (const Status& s : checks) {

@@ -48,7 +48,8 @@ Status SamplerOptions::validate() const {
       checkRange("wall_jitter_theta", wall_jitter_theta, 0.0, kPi),
       checkRange("wall_end_sigma", wall_end_sigma, 0.0, 10.0),
       checkRange("wall_split_gap", wall_split_gap, 0.0, 10.0),
-      checkRange("wall_merge_reach", wall_merge_reach, 0.0, 10.0)};
+      checkRange("wall_merge_reach", wall_merge_reach, 0.0, 10.0),
+      checkRange("wall_join_reach", wall_join_reach, 0.0, 10.0)};
   for (const Status& s : checks) {
     if (!s) return s;
   }

@@ -25,9 +25,6 @@ namespace crunch {
 namespace {
 constexpr double kLog2Pi = 1.8378770664093453;
 
-// Line-direction difference modulo pi, in [0, pi/2].
-double lineAngleDiff(double a, double b) { return std::abs(wrapPeriod(a - b, kPi)); }
-
 // Running sums for a total-least-squares line fit.
 struct LineFit {
   double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
@@ -214,6 +211,7 @@ void Sampler::proposeWallBirth(int slot, double beta) {
   bb_.beginCollect();
   bb_.collectShapeletsNearSegment(a, b, wall_slots_);
   for (int32_t l : t.legs.span()) bb_.collectShapeletsNearLeg(l, wall_slots_);
+  bb_.touchWallEnds(t, a, b);
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   for (int32_t l : t.legs.span()) bb_.killLeg(l);
@@ -236,9 +234,10 @@ void Sampler::proposeWallBirth(int slot, double beta) {
 void Sampler::wallMove(int32_t id, double beta) {
   const double r = rng_.uniform();
   if (r < opt_.r1) deathWall(id, beta);
-  else if (r < 0.4) jitterWall(id, beta);
-  else if (r < 0.7) extendWall(id, beta);
-  else if (r < 0.85) mergeWall(id, beta);
+  else if (r < 0.35) jitterWall(id, beta);
+  else if (r < 0.6) extendWall(id, beta);
+  else if (r < 0.75) joinWallEnd(id, beta);
+  else if (r < 0.875) mergeWall(id, beta);
   else splitWall(id, beta);
 }
 
@@ -255,6 +254,7 @@ void Sampler::proposeWallDeath(int32_t id, double beta, double log_q_ratio) {
   bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
   Touched t;
   t.walls.add(id);
+  bb_.touchWallEnds(t, w.a, w.b);
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.killWall(id);
@@ -293,6 +293,8 @@ void Sampler::moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta) 
   bb_.collectShapeletsNearSegment(a, b, wall_slots_);
   Touched t;
   t.walls.add(id);
+  bb_.touchWallEnds(t, w.a, w.b);
+  bb_.touchWallEnds(t, a, b);
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.moveWall(id, a, b);
@@ -376,6 +378,9 @@ void Sampler::mergeWall(int32_t id, double beta) {
   Touched t;
   t.walls.add(id);
   t.walls.add(partner);
+  bb_.touchWallEnds(t, w.a, w.b);
+  bb_.touchWallEnds(t, ow.a, ow.b);
+  bb_.touchWallEnds(t, a, b);
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.killWall(partner);
@@ -387,6 +392,73 @@ void Sampler::mergeWall(int32_t id, double beta) {
   }
   bb_.moveWall(id, w.a, w.b);
   bb_.reviveWall(partner);
+}
+
+void Sampler::joinWallEnd(int32_t id, double beta) {
+  // Not a reversible-jump move: its reverse, the end let go back to where it was, has no
+  // density this move could evaluate (ModelParams::p_wall_end_free, docs/BLACKBOARD.md "Walls
+  // end at walls").
+  if (rj()) return;
+  const ModelParams& p = bb_.params();
+  const WallHyp w = bb_.wall(id);
+  const double len = w.length();
+  if (len <= 0) return;
+  const bool at_b = rng_.uniform() < 0.5;
+  const Vec2 end = at_b ? w.b : w.a;
+  const Vec2 out = (at_b ? Vec2(w.b - w.a) : Vec2(w.a - w.b)) / len;  // along the wall, outwards
+  const double reach = opt_.wall_join_reach;
+  const auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };
+  // A partner, uniform among the live walls at a junction's angle whose line w's line meets
+  // within reach of the end (s along `out`, backwards too: a wall through another is cut back),
+  // at a point within reach of the partner's segment (u along it, in units of its length).
+  int32_t partner = kNone;
+  double s_at = 0, u_at = 0;
+  int seen = 0;
+  bb_.wallsNear(end, reach, [&](int32_t o) {
+    const WallHyp& v = bb_.wall(o);
+    if (o == id || !v.alive || lineAngleDiff(v.angle(), w.angle()) < kWallJunctionAngle) return;
+    const Vec2 dv = v.b - v.a, q = v.a - end;
+    const double den = cross(out, dv), vl = v.length();
+    if (vl <= 0 || std::abs(den) < 1e-12) return;
+    const double s = cross(q, dv) / den, u = cross(q, out) / den;
+    if (std::abs(s) > reach || std::max({0.0, -u, u - 1.0}) * vl > reach) return;
+    if (rng_.uniform() * ++seen < 1.0) {
+      partner = o;
+      s_at = s;
+      u_at = u;
+    }
+  });
+  if (partner == kNone || len + s_at < p.wall_min_length) return;
+  const WallHyp v = bb_.wall(partner);
+  const Vec2 meet = end + s_at * out;
+  const Vec2 a = at_b ? w.a : meet, b = at_b ? meet : w.b;
+  // The partner's near end to the meeting point when it lies beyond the partner (a corner).
+  const bool v_moves = u_at < 0.0 || u_at > 1.0;
+  const Vec2 va = u_at < 0.0 ? meet : v.a, vb = u_at > 1.0 ? meet : v.b;
+  if (v_moves && (vb - va).norm() < p.wall_min_length) return;
+  wall_slots_.clear();
+  bb_.beginCollect();
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+  Touched t;
+  t.walls.add(id);
+  bb_.touchWallEnds(t, w.a, w.b);
+  bb_.touchWallEnds(t, a, b);
+  if (v_moves) {
+    bb_.collectShapeletsNearSegment(v.a, v.b, wall_slots_);
+    bb_.collectShapeletsNearSegment(va, vb, wall_slots_);
+    t.walls.add(partner);
+    bb_.touchWallEnds(t, v.a, v.b);
+    bb_.touchWallEnds(t, va, vb);
+  }
+  begin();
+  const double e0 = bb_.energyBefore(t, wall_slots_);
+  bb_.moveWall(id, a, b);
+  if (v_moves) bb_.moveWall(partner, va, vb);
+  const double e1 = bb_.energyAfter(t, wall_slots_);
+  if (decide(e1 - e0, beta)) return;
+  bb_.moveWall(id, w.a, w.b);
+  if (v_moves) bb_.moveWall(partner, v.a, v.b);
 }
 
 void Sampler::splitWall(int32_t id, double beta) {
@@ -411,6 +483,7 @@ void Sampler::splitWall(int32_t id, double beta) {
   bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
   Touched t;
   t.walls.add(id);
+  bb_.touchWallEnds(t, w.a, w.b);  // the pieces lie on it
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.moveWall(id, a1, b1);
@@ -483,6 +556,7 @@ void Sampler::rjWallBirthDeath(double beta) {
     bb_.beginCollect();
     bb_.collectShapeletsNearSegment(a, b, wall_slots_);
     Touched t;
+    bb_.touchWallEnds(t, a, b);
     begin();
     const double e0 = bb_.energyBefore(t, wall_slots_);
     const int32_t id = bb_.addWall(a, b);

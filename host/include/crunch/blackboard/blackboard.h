@@ -13,6 +13,7 @@
 // and, with walls (--model walls or rooms, docs/BLACKBOARD.md "Walls"),
 //         + sum_W [ logodds(delta^3 c_W) - wall_cost_per_m |W| + free(W) ]
 //         + (#table-wall and leg-wall pairs intruding into the wall's solid) log eps_b
+//         + (#wall ends that meet no other wall) log(p_free / (1 - p_free))  ("Walls end at walls")
 // with each wall's kernel alpha_W exp(-Delta_WS) joining the shapelets' noisy-OR sums.
 // where logodds(P) = log P - log(1 - P) is each hypothesis' presence against its absence.
 // A move's acceptance needs only the change of J, which localEnergy() computes over the
@@ -79,12 +80,15 @@ struct IdSet {
 inline constexpr int kMaxBlanketShapelets = 256;
 using ShapeletSet = IdSet<kMaxBlanketShapelets>;
 
-// What a move touches: tables, legs, walls, and working-memory slots of shapelets.
+// What a move touches: tables, legs, walls, and working-memory slots of shapelets; and the
+// walls whose ends may join or leave the touched walls (Blackboard::touchWallEnds): only their
+// end terms change.
 struct Touched {
   IdSet<8> tables;
   IdSet<4 * kMaxChildren> legs;
   ShapeletSet shapelets;
   IdSet<4> walls;
+  IdSet<16> wall_ends;
 };
 
 // Walls are hashed at points this far apart along them (blackboard.cc).
@@ -166,6 +170,12 @@ class Blackboard {
     wall_hash_.query(c, radius + 0.5 * wall_hash_.cell(), [&](int32_t id) { seen.add(id); });
     for (int32_t id : seen.span()) f(id);
   }
+  // Adds to t.wall_ends every live wall with an end within wallLinkRadius() of the segment
+  // a..b: the walls whose end terms a wall moving from or to a..b can change. A wall move calls
+  // it for each old and new segment before energyBefore().
+  void touchWallEnds(Touched& t, const Vec2& a, const Vec2& b) const;
+  // Whether end `e` of wall `self` meets another live wall (ModelParams::p_wall_end_free).
+  bool wallEndJoined(const Vec2& e, int32_t self) const;
   // Appends to `out` the working-memory slots of shapelets within wallLinkRadius() of the
   // segment a..b that are not yet in it since the last beginCollect() (so the union over
   // several segments holds each slot once). `out` must have capacity for every slot.
@@ -277,6 +287,10 @@ class Blackboard {
   double tableSizeTerm(const TableHyp& t) const;
   double legSideTerm(const LegHyp& l) const;
   double wallTerms(int32_t id, const Touched& t) const;
+  // A live wall's end terms: logFreeWallEnd() for each end that meets no other wall.
+  double wallEndTerms(int32_t id) const;
+  // wallEndTerms over t.walls and t.wall_ends, each wall once.
+  double touchedWallEndTerms(const Touched& t) const;
   // A wall's negative evidence: the wall cut into pieces one leg side long, each charged as a
   // leg core is (blackboard.cc).
   double wallFreeTerm(const Vec2& a, const Vec2& b) const;
@@ -329,6 +343,7 @@ class Blackboard {
   uint32_t stamp_ = 0;
   int live_walls_ = 0;
   double wall_odds_ = 0.0;
+  double log_free_wall_end_ = 0.0;
   // Incremental energies: the generation a cached term must carry to be valid, the shapelets'
   // cached terms, and the fresh terms of the last energyAfter() (capacity fixed up front).
   bool incremental_ = true;

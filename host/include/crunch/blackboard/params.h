@@ -10,6 +10,10 @@
 
 namespace crunch {
 
+// Two walls meet at a junction (a corner, a T) only at an angle of at least this (modulo pi):
+// the midpoint between collinear (one wall) and perpendicular (a room's corner).
+inline constexpr double kWallJunctionAngle = kPi / 4;
+
 // What the blackboard can believe a room holds (`--model`, issue 13).
 enum class ObjectModel {
   // The paper's: one table size (table_width x table_depth, leg_side legs), no walls, the
@@ -116,6 +120,13 @@ struct ModelParams {
   double wall_solid_depth = 0.015;
   // Shortest wall a move may make.
   double wall_min_length = 0.05;
+  // Walls end at walls (docs/BLACKBOARD.md "Walls end at walls"): of a room's wall ends, a
+  // fraction p_wall_end_free are free (a door jamb, the end of a partition); the others meet
+  // another wall at a corner or a T. Each free end adds log(p / (1 - p)) to the log joint, a
+  // joined end 0. An end is joined when another live wall's segment passes within
+  // wallLinkRadius() of it at an angle of at least kWallJunctionAngle (collinear pieces are one
+  // wall, not a junction). 0.5 makes an end's state cost nothing (the walls before this term).
+  double p_wall_end_free = 0.2;
 
   // The ranges: priors c_*, alpha_* and delta3 positive (at most 1e6); penalties eps_* in
   // (0, 1]; spreads positive, at most 1 m or pi rad (sigma_w at most 1 m); the table 0.05..10 m
@@ -125,7 +136,7 @@ struct ModelParams {
   // 0 < leg_min <= leg_max < size_min_side / 2 (four legs fit under the smallest top) (a leg
   // thinner than 2 free_margin has its centre point as its core); c_W, alpha_W as the other
   // priors; wall_cost_per_m 0..1e3; wall_min_length 0.001..1 m; wall_solid_depth in (0, 1] m;
-  // catalog_weight in [0, 1), catalog_sigma in (0, 0.5] m.
+  // p_wall_end_free in (0, 0.5]; catalog_weight in [0, 1), catalog_sigma in (0, 0.5] m.
   // okStatus(), or an Error naming the first bad field.
   Status validate() const;
 
@@ -176,6 +187,8 @@ struct ModelParams {
   }
   // Distance from a segment within which a shapelet can be caused by a wall (eq. 30).
   double wallLinkRadius() const { return link_sigmas * sigma_r_shapelet; }
+  // A free wall end's term: log(p_wall_end_free / (1 - p_wall_end_free)), 0 at 0.5.
+  double logFreeWallEnd() const { return std::log(p_wall_end_free / (1.0 - p_wall_end_free)); }
   // Radius within which a leg centre can belong to a table corner (eq. 30).
   double cornerLinkRadius() const { return link_sigmas * sigma_r_leg; }
 };

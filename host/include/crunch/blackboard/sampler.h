@@ -142,12 +142,18 @@ struct SamplerOptions {
   double wall_birth_rate = 0.25;
   double wall_grow_gap = 0.5;
   // Pose moves of a wall: perpendicular shift and turn about its middle; an end moved along it;
-  // the gap a split cuts out at most; the reach within which merge finds a partner.
+  // the gap a split cuts out at most; the reach within which merge finds a partner; how far
+  // joinWallEnd carries an end (and a partner's end) to meet another wall. The two reaches
+  // limit what is proposed, not what is kept: each lies past the gap the energy pays for with
+  // the defaults (merge: (|logodds(delta^3 c_W)| + 2 |log free end|) / wall_cost_per_m =
+  // (1.66 + 2.77) / 2 = 2.2 m; a corner's two ends: 2 |log free end| / wall_cost_per_m = 1.39 m),
+  // so the energy, not the proposal, decides (docs/BLACKBOARD.md "Walls end at walls").
   double wall_jitter_r = 0.005;
   double wall_jitter_theta = kPi / 360;
   double wall_end_sigma = 0.05;
   double wall_split_gap = 0.3;
-  double wall_merge_reach = 0.5;
+  double wall_merge_reach = 2.5;
+  double wall_join_reach = 1.5;
   // Called by anneal() after each temperature (its sweeps and pruning) with the temperature's
   // place in the annealing, 0 = the hottest (beta_{schedule_steps-1}) ... schedule_steps - 1 =
   // the coldest, its beta, and the blackboard: for pictures of it part-way (paper Fig. 4).
@@ -463,6 +469,10 @@ class Sampler {
   void jitterWall(int32_t id, double beta);
   void extendWall(int32_t id, double beta);
   void mergeWall(int32_t id, double beta);
+  // Walls end at walls: one end carried along the wall's line to the line of a wall crossing it
+  // at a junction's angle, that wall's near end carried to the meeting point too when it falls
+  // beyond it (a corner); the paper's acceptance only.
+  void joinWallEnd(int32_t id, double beta);
   void splitWall(int32_t id, double beta);
   // Removes walls along which no shapelet lies (within wallLinkRadius), as prune() does legs.
   void pruneWalls();

@@ -68,6 +68,9 @@ inline double wrapPeriod(double a, double period) {
   return detail::foldPeriod(a + 0.5 * period, period) - 0.5 * period;
 }
 
+// The difference of two line directions modulo pi, in [0, pi/2].
+inline double lineAngleDiff(double a, double b) { return std::abs(wrapPeriod(a - b, kPi)); }
+
 // An orientation modulo pi (a line's, a surface's), as a value in [0, pi).
 inline double wrapHalfTurn(double a) {
   double w = wrapPeriod(a, kPi);
