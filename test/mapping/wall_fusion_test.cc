@@ -53,6 +53,55 @@ TEST_CASE("fuseWalls: parallel walls apart or across each other stay apart", "[m
   CHECK(fuseWalls(chains).size() == 3);
 }
 
+TEST_CASE("fuseWalls: ends the chains joined to another wall meet it where the lines cross",
+          "[mapping]") {
+  // Walls end at walls (wall_fusion.h): a corner whose two walls stop 4 and 3 cm short of each
+  // other, a T whose stem stops 3 cm short, a parallel piece 5.5 cm beside a wall (apart in the
+  // fusion, within the junction radius of it, but no junction), and an end 10 cm from a wall
+  // (outside the 6 cm junction radius), in every chain.
+  std::vector<std::vector<WallHyp>> chains(4);
+  for (auto& c : chains) {
+    c.push_back(wall(0.04, 0.0, 2.0, 0.0));   // the corner's bottom wall, free side +y
+    c.push_back(wall(0.0, 2.0, 0.0, 0.03));   // its left wall, free side +x
+    c.push_back(wall(1.0, 0.03, 1.0, 1.0));   // a T's stem on the bottom wall
+    c.push_back(wall(1.5, 0.055, 3.0, 0.055));  // parallel to the bottom wall: no junction
+    c.push_back(wall(0.5, 1.5, 0.1, 1.5));    // 10 cm from the left wall: stays free
+  }
+  WallFuseOptions opt;
+  opt.junction = 0.06;
+  const std::vector<MapWall> met = fuseWalls(chains, opt);
+  const std::vector<MapWall> free = fuseWalls(chains);  // junction 0: the chains' medians
+  REQUIRE(met.size() == 5);
+  REQUIRE(free.size() == 5);
+  // The wall with an end at (x, y) (each is looked up by an end that does not move).
+  const auto at = [](const std::vector<MapWall>& ws, double x, double y) -> const MapWall& {
+    for (const MapWall& w : ws)
+      if ((w.a - Vec2{x, y}).norm() < 0.01 || (w.b - Vec2{x, y}).norm() < 0.01) return w;
+    FAIL("no wall near " << x << ", " << y);
+    return ws.front();
+  };
+  const auto near = [](const Vec2& p, double x, double y) {
+    return (p - Vec2{x, y}).norm() < 1e-9;
+  };
+  // Each wall keeps its direction (its free side); only the joined ends move.
+  const MapWall& bottom = at(met, 2.0, 0.0);
+  CHECK(near(bottom.a, 0.0, 0.0));  // the corner, both ends at the crossing
+  CHECK(near(bottom.b, 2.0, 0.0));  // beside the parallel piece: not a junction
+  const MapWall& left = at(met, 0.0, 2.0);
+  CHECK(near(left.b, 0.0, 0.0));
+  CHECK(near(left.a, 0.0, 2.0));
+  const MapWall& stem = at(met, 1.0, 1.0);
+  CHECK(near(stem.a, 1.0, 0.0));  // the T's stem on the wall it meets
+  CHECK(near(stem.b, 1.0, 1.0));
+  const MapWall& piece = at(met, 3.0, 0.055);
+  CHECK(near(piece.a, 1.5, 0.055));
+  const MapWall& shelf = at(met, 0.5, 1.5);
+  CHECK(near(shelf.b, 0.1, 1.5));  // beyond the junction radius
+  // Without a junction radius the ends are where the chains left them.
+  CHECK(near(at(free, 2.0, 0.0).a, 0.04, 0.0));
+  CHECK(near(at(free, 1.0, 1.0).a, 1.0, 0.03));
+}
+
 TEST_CASE("evaluateWalls: coverage of touched boundary, interior found, false length",
           "[mapping]") {
   Scene scene;  // 4 x 4

@@ -23,6 +23,13 @@ void holdWholeRun(Blackboard& board, const Map& map, const FreeSpaceGrid* free) 
 }
 
 // Per-pose MAPs that agree with each fused table.
+// Walls across chains, their joined ends met where the model counts an end joined.
+WallFuseOptions wallFuseOptions(const MappingOptions& options) {
+  WallFuseOptions o;
+  o.junction = options.model.wallLinkRadius();
+  return o;
+}
+
 void countSupport(std::vector<MapTable>& tables, const Map& map, const FuseOptions& fuse) {
   for (MapTable& t : tables)
     for (const PoseMap& pm : map.per_pose)
@@ -68,7 +75,7 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
     n_samples += r.sample_count;
     if (options.model.walled()) chain_walls.push_back(std::move(r.walls));
   }
-  map.walls = fuseWalls(chain_walls);
+  map.walls = fuseWalls(chain_walls, wallFuseOptions(options));
   MarginalOptions mo;
   mo.radius = options.fuse.radius;
   mo.angle = options.fuse.angle;
@@ -139,7 +146,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     chains[c].tables = std::move(results[c].tables);
     if (options.model.walled()) chain_walls.push_back(std::move(results[c].walls));
   }
-  map.walls = fuseWalls(chain_walls);
+  map.walls = fuseWalls(chain_walls, wallFuseOptions(options));
   FuseOptions agree = options.fuse;
   agree.min_support = options.chain_fusion == ChainFusion::kVote ? (n_chains + 1) / 2 : 1;
   std::vector<Pose2> poses;

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "crunch/blackboard/params.h"
+#include "crunch/core/geometry.h"
+
 namespace crunch {
 
 namespace {
@@ -60,6 +63,44 @@ struct Group {
   }
 };
 
+// Walls end at walls: each end of `walls` within `radius` of another wall's segment at a
+// junction's angle moves along its own line to the two lines' crossing (the nearest such wall's,
+// when there are several). Every move is computed from the walls as they came, so the order of
+// the walls does not matter; an end is left where it is when the crossing lies more than
+// 2 radius away (a shallow angle) or would leave the wall shorter than `radius`.
+void meetAtJunctions(std::vector<MapWall>& walls, double radius) {
+  const std::vector<MapWall> in = walls;
+  const auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };
+  for (size_t i = 0; i < in.size(); ++i) {
+    const MapWall& w = in[i];
+    const double len = (w.b - w.a).norm();
+    if (len <= 0.0) continue;
+    const Vec2 u = (w.b - w.a) / len;
+    for (const bool at_b : {false, true}) {
+      const Vec2 e = at_b ? w.b : w.a;
+      double nearest = radius, s_at = 0.0;
+      bool found = false;
+      for (size_t j = 0; j < in.size(); ++j) {
+        const Vec2 d = in[j].b - in[j].a;
+        if (j == i || d.norm() <= 0.0 ||
+            lineAngleDiff(std::atan2(d.y(), d.x()), std::atan2(u.y(), u.x())) <
+                kWallJunctionAngle)
+          continue;
+        const double dist = distanceToSegment(e, in[j].a, in[j].b);
+        if (dist > nearest || (found && dist == nearest)) continue;
+        nearest = dist;
+        s_at = cross(in[j].a - w.a, d) / cross(u, d);  // along u from w.a to the crossing
+        found = true;
+      }
+      if (!found) continue;
+      const Vec2 p = w.a + s_at * u;
+      const double kept = at_b ? s_at : len - s_at;
+      if ((p - e).norm() > 2.0 * radius || kept < radius) continue;
+      (at_b ? walls[i].b : walls[i].a) = p;
+    }
+  }
+}
+
 double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const size_t n = v.size();
@@ -115,6 +156,7 @@ std::vector<MapWall> fuseWalls(const std::vector<std::vector<WallHyp>>& chains,
     w.score = score;
     out.push_back(w);
   }
+  if (opt.junction > 0.0) meetAtJunctions(out, opt.junction);
   return out;
 }
 

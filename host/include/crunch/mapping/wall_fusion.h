@@ -3,6 +3,10 @@
 // `angle`, every end within `offset` of the group's line) that overlap or nearly meet along it
 // (gap at most `gap`). Its score is the fraction of chains with a wall in the group; groups with
 // score >= min_score are kept, spanning the median of the chains' ends along the group's line.
+// Then walls end at walls (docs/BLACKBOARD.md "Walls end at walls"): a kept wall's end within
+// `junction` of another kept wall's segment, at kWallJunctionAngle or more, is an end the chains
+// joined to that wall, and is reported where the two lines cross: a corner's two ends at its
+// corner, a T's stem on the wall it meets.
 #pragma once
 
 #include <vector>
@@ -17,6 +21,9 @@ struct WallFuseOptions {
   double offset = 0.05;               // metres across the line
   double gap = 0.10;                  // metres along it
   double min_score = 0.5;
+  // Metres; 0 leaves every end at the chains' median. The mapper passes the model's
+  // ModelParams::wallLinkRadius(), the distance within which the log joint counts an end joined.
+  double junction = 0.0;
 };
 
 // chains[i]: the walls chain i ended with.
