@@ -289,17 +289,22 @@ void Sampler::moveWallTo(int32_t id, const Vec2& a, const Vec2& b, double beta) 
   const WallHyp w = bb_.wall(id);
   wall_slots_.clear();
   bb_.beginCollect();
-  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
-  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
   Touched t;
-  t.walls.add(id);
-  bb_.touchWallEnds(t, w.a, w.b);
-  bb_.touchWallEnds(t, a, b);
+  touchWallMove(t, id, a, b);
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.moveWall(id, a, b);
   const double e1 = bb_.energyAfter(t, wall_slots_);
   if (!decide(e1 - e0, beta)) bb_.moveWall(id, w.a, w.b);
+}
+
+void Sampler::touchWallMove(Touched& t, int32_t id, const Vec2& a, const Vec2& b) {
+  const WallHyp& w = bb_.wall(id);
+  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
+  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
+  t.walls.add(id);
+  bb_.touchWallEnds(t, w.a, w.b);
+  bb_.touchWallEnds(t, a, b);
 }
 
 void Sampler::extendWall(int32_t id, double beta) {
@@ -438,19 +443,9 @@ void Sampler::joinWallEnd(int32_t id, double beta) {
   if (v_moves && (vb - va).norm() < p.wall_min_length) return;
   wall_slots_.clear();
   bb_.beginCollect();
-  bb_.collectShapeletsNearSegment(w.a, w.b, wall_slots_);
-  bb_.collectShapeletsNearSegment(a, b, wall_slots_);
   Touched t;
-  t.walls.add(id);
-  bb_.touchWallEnds(t, w.a, w.b);
-  bb_.touchWallEnds(t, a, b);
-  if (v_moves) {
-    bb_.collectShapeletsNearSegment(v.a, v.b, wall_slots_);
-    bb_.collectShapeletsNearSegment(va, vb, wall_slots_);
-    t.walls.add(partner);
-    bb_.touchWallEnds(t, v.a, v.b);
-    bb_.touchWallEnds(t, va, vb);
-  }
+  touchWallMove(t, id, a, b);
+  if (v_moves) touchWallMove(t, partner, va, vb);
   begin();
   const double e0 = bb_.energyBefore(t, wall_slots_);
   bb_.moveWall(id, a, b);

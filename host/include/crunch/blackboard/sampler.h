@@ -473,6 +473,9 @@ class Sampler {
   // at a junction's angle, that wall's near end carried to the meeting point too when it falls
   // beyond it (a corner); the paper's acceptance only.
   void joinWallEnd(int32_t id, double beta);
+  // A wall moving from its segment to a..b, into a move's blanket: the wall, the shapelets along
+  // both segments (wall_slots_, after beginCollect()) and the walls whose ends either can join.
+  void touchWallMove(Touched& t, int32_t id, const Vec2& a, const Vec2& b);
   void splitWall(int32_t id, double beta);
   // Removes walls along which no shapelet lies (within wallLinkRadius), as prune() does legs.
   void pruneWalls();
