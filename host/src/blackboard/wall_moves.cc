@@ -412,7 +412,6 @@ void Sampler::joinWallEnd(int32_t id, double beta) {
   const Vec2 end = at_b ? w.b : w.a;
   const Vec2 out = (at_b ? Vec2(w.b - w.a) : Vec2(w.a - w.b)) / len;  // along the wall, outwards
   const double reach = opt_.wall_join_reach;
-  const auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };
   // A partner, uniform among the live walls at a junction's angle whose line w's line meets
   // within reach of the end (s along `out`, backwards too: a wall through another is cut back),
   // at a point within reach of the partner's segment (u along it, in units of its length).
@@ -423,9 +422,9 @@ void Sampler::joinWallEnd(int32_t id, double beta) {
     const WallHyp& v = bb_.wall(o);
     if (o == id || !v.alive || lineAngleDiff(v.angle(), w.angle()) < kWallJunctionAngle) return;
     const Vec2 dv = v.b - v.a, q = v.a - end;
-    const double den = cross(out, dv), vl = v.length();
+    const double den = cross2d(out, dv), vl = v.length();
     if (vl <= 0 || std::abs(den) < 1e-12) return;
-    const double s = cross(q, dv) / den, u = cross(q, out) / den;
+    const double s = cross2d(q, dv) / den, u = cross2d(q, out) / den;
     if (std::abs(s) > reach || std::max({0.0, -u, u - 1.0}) * vl > reach) return;
     if (rng_.uniform() * ++seen < 1.0) {
       partner = o;

@@ -99,9 +99,8 @@ Pose2 fitRigid(const Vec2* local, const Vec2* world, int n, double theta) {
 
 namespace {
 bool segmentsIntersect(const Vec2& p1, const Vec2& p2, const Vec2& q1, const Vec2& q2) {
-  auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };
-  const double d1 = cross(q2 - q1, p1 - q1), d2 = cross(q2 - q1, p2 - q1);
-  const double d3 = cross(p2 - p1, q1 - p1), d4 = cross(p2 - p1, q2 - p1);
+  const double d1 = cross2d(q2 - q1, p1 - q1), d2 = cross2d(q2 - q1, p2 - q1);
+  const double d3 = cross2d(p2 - p1, q1 - p1), d4 = cross2d(p2 - p1, q2 - p1);
   return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
 }
 }  // namespace

@@ -70,7 +70,6 @@ struct Group {
 // 2 radius away (a shallow angle) or would leave the wall shorter than `radius`.
 void meetAtJunctions(std::vector<MapWall>& walls, double radius) {
   const std::vector<MapWall> in = walls;
-  const auto cross = [](const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); };
   for (size_t i = 0; i < in.size(); ++i) {
     const MapWall& w = in[i];
     const double len = (w.b - w.a).norm();
@@ -89,7 +88,7 @@ void meetAtJunctions(std::vector<MapWall>& walls, double radius) {
         const double dist = distanceToSegment(e, in[j].a, in[j].b);
         if (dist > nearest || (found && dist == nearest)) continue;
         nearest = dist;
-        s_at = cross(in[j].a - w.a, d) / cross(u, d);  // along u from w.a to the crossing
+        s_at = cross2d(in[j].a - w.a, d) / cross2d(u, d);  // along u from w.a to the crossing
         found = true;
       }
       if (!found) continue;

@@ -68,6 +68,9 @@ inline double wrapPeriod(double a, double period) {
   return detail::foldPeriod(a + 0.5 * period, period) - 0.5 * period;
 }
 
+// The 2-D cross product u x v (the z of the 3-D one): |u||v| sin of the angle from u to v.
+inline double cross2d(const Vec2& u, const Vec2& v) { return u.x() * v.y() - u.y() * v.x(); }
+
 // The difference of two line directions modulo pi, in [0, pi/2].
 inline double lineAngleDiff(double a, double b) { return std::abs(wrapPeriod(a - b, kPi)); }
 
