@@ -463,15 +463,14 @@ bool Blackboard::wallEndJoined(const Vec2& e, int32_t self) const {
   wallsNear(e, r, [&](int32_t o) {
     if (joined || o == self) return;
     const WallHyp& w = walls_[o];
-    joined = w.alive && distanceToSegment(e, w.a, w.b) <= r &&
-             lineAngleDiff(w.angle(), th) >= kWallJunctionAngle;
+    joined = w.alive && wallEndMeets(e, th, w.a, w.b, r);
   });
   return joined;
 }
 
 double Blackboard::wallEndTerms(int32_t id) const {
   const WallHyp& w = walls_[id];
-  if (!w.alive || log_free_wall_end_ == 0.0) return 0.0;
+  if (!w.alive) return 0.0;
   return (wallEndJoined(w.a, id) ? 0.0 : log_free_wall_end_) +
          (wallEndJoined(w.b, id) ? 0.0 : log_free_wall_end_);
 }
@@ -859,8 +858,7 @@ double Blackboard::totalEnergy() const {
       for (int32_t j = 0; j < walls_.extent(); ++j) {
         const WallHyp& o = walls_[j];
         joined = joined || (j != i && o.alive &&
-                            distanceToSegment(end, o.a, o.b) <= p_.wallLinkRadius() &&
-                            lineAngleDiff(o.angle(), w.angle()) >= kWallJunctionAngle);
+                            wallEndMeets(end, w.angle(), o.a, o.b, p_.wallLinkRadius()));
       }
       if (!joined) e += p_.logFreeWallEnd();
     }

@@ -22,7 +22,6 @@ void holdWholeRun(Blackboard& board, const Map& map, const FreeSpaceGrid* free) 
   board.setFreeSpace(free);
 }
 
-// Per-pose MAPs that agree with each fused table.
 // Walls across chains, their joined ends met where the model counts an end joined.
 WallFuseOptions wallFuseOptions(const MappingOptions& options) {
   WallFuseOptions o;
@@ -30,6 +29,7 @@ WallFuseOptions wallFuseOptions(const MappingOptions& options) {
   return o;
 }
 
+// Per-pose MAPs that agree with each fused table.
 void countSupport(std::vector<MapTable>& tables, const Map& map, const FuseOptions& fuse) {
   for (MapTable& t : tables)
     for (const PoseMap& pm : map.per_pose)

@@ -75,18 +75,17 @@ void meetAtJunctions(std::vector<MapWall>& walls, double radius) {
     const double len = (w.b - w.a).norm();
     if (len <= 0.0) continue;
     const Vec2 u = (w.b - w.a) / len;
+    const double angle = std::atan2(u.y(), u.x());
     for (const bool at_b : {false, true}) {
       const Vec2 e = at_b ? w.b : w.a;
       double nearest = radius, s_at = 0.0;
       bool found = false;
       for (size_t j = 0; j < in.size(); ++j) {
         const Vec2 d = in[j].b - in[j].a;
-        if (j == i || d.norm() <= 0.0 ||
-            lineAngleDiff(std::atan2(d.y(), d.x()), std::atan2(u.y(), u.x())) <
-                kWallJunctionAngle)
+        if (j == i || d.norm() <= 0.0 || !wallEndMeets(e, angle, in[j].a, in[j].b, nearest))
           continue;
         const double dist = distanceToSegment(e, in[j].a, in[j].b);
-        if (dist > nearest || (found && dist == nearest)) continue;
+        if (found && dist == nearest) continue;
         nearest = dist;
         s_at = cross2d(in[j].a - w.a, d) / cross2d(u, d);  // along u from w.a to the crossing
         found = true;

@@ -14,6 +14,15 @@ namespace crunch {
 // the midpoint between collinear (one wall) and perpendicular (a room's corner).
 inline constexpr double kWallJunctionAngle = kPi / 4;
 
+// Whether the end `e` of a wall along `angle` meets the wall a..b: a..b passes within `radius`
+// of it at a junction's angle. The one definition of a joined end, for the log joint
+// (ModelParams::p_wall_end_free) and the fused map (wall_fusion.h).
+inline bool wallEndMeets(const Vec2& e, double angle, const Vec2& a, const Vec2& b,
+                         double radius) {
+  return distanceToSegment(e, a, b) <= radius &&
+         lineAngleDiff(std::atan2(b.y() - a.y(), b.x() - a.x()), angle) >= kWallJunctionAngle;
+}
+
 // What the blackboard can believe a room holds (`--model`, issue 13).
 enum class ObjectModel {
   // The paper's: one table size (table_width x table_depth, leg_side legs), no walls, the
