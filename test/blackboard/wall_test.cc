@@ -343,6 +343,51 @@ TEST_CASE("Sampler: contacts along a wall become a wall, not a table", "[blackbo
   }
 }
 
+TEST_CASE("Sampler: contacts far apart along a line become one wall where no whisker crossed "
+          "between them, and no wall where whiskers did", "[blackboard]") {
+  // sparse_poses' boundary: one pose's contacts on a wall every 0.85 m, each cluster shorter
+  // than a leg's diagonal (a leg's to explain on its own), beyond wall_grow_gap (0.5 m) but
+  // within wall_grow_gap_unseen (1.5 m, the gap one contact pays for).
+  const ModelParams p = rooms();
+  std::vector<Shapelet> contacts;
+  for (const double x0 : {0.3, 1.15, 2.0, 2.85})
+    for (const Shapelet& s : wallShapelets({x0, 0.4}, {x0 + 0.04, 0.4}, 0.02, 0.002))
+      contacts.push_back(s);
+  for (const bool crossed : {false, true}) {
+    // Whiskers swept in front of the line (y 0.42-0.6, the sensed side) and, when `crossed`,
+    // also through it in each gap between the clusters.
+    FreeSpaceGrid free({0, 0}, {3.5, 1.0}, 0.01);
+    Rng rays(7);
+    for (int i = 0; i < 400; ++i) {
+      const double x = rays.uniform(0.2, 3.0), y = rays.uniform(0.42, 0.6);
+      free.addRay({{x, y}, {x + rays.uniform(-0.1, 0.1), 0.6}});
+    }
+    if (crossed)
+      for (const double gx : {0.7, 1.6, 2.45})
+        for (int i = 0; i < 6; ++i) free.addRay({{gx + 0.05 * i, 0.55}, {gx + 0.05 * i, 0.3}});
+    for (const uint64_t seed : {1u, 2u, 3u}) {
+      INFO((crossed ? "gaps crossed" : "gaps never crossed") << ", seed " << seed);
+      Blackboard bb(p, 64, 256);
+      bb.setFreeSpace(&free);
+      for (const Shapelet& s : contacts) bb.pushShapelet(s);
+      Rng rng(seed);
+      Sampler sampler(bb, {}, rng);
+      sampler.anneal();
+      std::vector<WallHyp> walls;
+      sampler.mapWalls(walls);
+      double longest = 0.0;
+      for (const WallHyp& w : walls) longest = std::max(longest, w.length());
+      if (crossed) {
+        CHECK(longest < 0.1);  // each cluster is a leg's, or nothing's
+      } else {
+        REQUIRE(walls.size() == 1);
+        CHECK(longest > 2.5);  // 0.3 .. 2.89
+        CHECK(std::abs(walls[0].a.y() - 0.4) < 0.01);
+      }
+    }
+  }
+}
+
 TEST_CASE("Sampler: walls felt short of their corner are joined at it, and end at their "
           "contacts without the junction prior",
           "[blackboard]") {

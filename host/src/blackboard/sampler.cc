@@ -44,6 +44,7 @@ Status SamplerOptions::validate() const {
       checkRange("side_prior_draws", side_prior_draws, 0.0, 1.0),
       checkRange("wall_birth_rate", wall_birth_rate, 0.0, 1.0),
       checkRange("wall_grow_gap", wall_grow_gap, 0.0, 10.0),
+      checkRange("wall_grow_gap_unseen", wall_grow_gap_unseen, 0.0, 10.0),
       checkRange("wall_jitter_r", wall_jitter_r, 0.0, 10.0),
       checkRange("wall_jitter_theta", wall_jitter_theta, 0.0, kPi),
       checkRange("wall_end_sigma", wall_end_sigma, 0.0, 10.0),

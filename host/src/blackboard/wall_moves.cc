@@ -110,19 +110,24 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
   const double seed_side = (Vec2{seed.ox, seed.oy} - c).dot(nrm0);
   if (seed_side == 0.0) return false;
   double max_span = 0.0;
+  // An inlier of the current line: oriented along it within tol_th, sensed from the seed's side
+  // (the same face), within tol_r of it; `t` its place along dir.
+  const auto inlier = [&](const Shapelet& so, double& t) {
+    if (!so.oriented || lineAngleDiff(so.phi, th) > tol_th) return false;
+    const double side = (Vec2{so.ox, so.oy} - c).dot(nrm0);
+    if (side * seed_side <= 0.0) return false;
+    const Vec2 q = Vec2{so.x, so.y} - c;
+    t = q.dot(dir);
+    return std::abs(q.x() * dir.y() - q.y() * dir.x()) <= tol_r;
+  };
   // Window [t_from, t_to] along the current line; the first is around the seed.
   const auto take = [&](double t_from, double t_to) {
     int added = 0;
     const Vec2 mid = c + dir * (0.5 * (t_from + t_to));
     bb_.shapeletsWithin(mid, 0.5 * (t_to - t_from) + tol_r, [&](int32_t o) {
       const Shapelet& so = bb_.shapelet(o);
-      if (!so.oriented || lineAngleDiff(so.phi, th) > tol_th) return;
-      // Sensed from the seed's side of the line: the same face.
-      const double side = (Vec2{so.ox, so.oy} - c).dot(nrm0);
-      if (side * seed_side <= 0.0) return;
-      const Vec2 q = Vec2{so.x, so.y} - c;
-      const double t = q.dot(dir), perp = std::abs(q.x() * dir.y() - q.y() * dir.x());
-      if (t < t_from || t > t_to || perp > tol_r) return;
+      double t = 0.0;
+      if (!inlier(so, t) || t < t_from || t > t_to) return;
       fit.add({so.x, so.y});
       max_span = std::max(max_span, so.face_span);
       if (t < (lo - c).dot(dir)) lo = {so.x, so.y};
@@ -130,6 +135,26 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
       ++added;
     });
     return added;
+  };
+  // Past the near gap: the nearest inlier within unseen_gap beyond `from` (sense +1 forward,
+  // -1 back), taken when no free ray crossed the line between (Blackboard::wallFreeTerm is 0
+  // there): a wall predicts a contact wherever a whisker reached its line, so a gap no whisker
+  // crossed is as much a wall's as a contact is, and one a whisker passed through is not.
+  const double unseen_gap = std::max(gap, opt_.wall_grow_gap_unseen);
+  const auto takeUnseen = [&](double from, double sense) {
+    if (unseen_gap <= gap || !bb_.hasFreeSpace()) return 0;
+    double best = std::numeric_limits<double>::infinity();
+    const Vec2 mid = c + dir * (from + sense * 0.5 * unseen_gap);
+    bb_.shapeletsWithin(mid, 0.5 * unseen_gap + tol_r, [&](int32_t o) {
+      double t = 0.0;
+      if (!inlier(bb_.shapelet(o), t)) return;
+      const double ahead = sense * (t - from);
+      if (ahead > 1e-9 && ahead <= unseen_gap) best = std::min(best, ahead);
+    });
+    if (!std::isfinite(best)) return 0;
+    const double to = from + sense * best;
+    if (bb_.wallFreeTerm(c + dir * from, c + dir * to) != 0.0) return 0;
+    return sense > 0 ? take(from + 1e-9, to) : take(to, from - 1e-9);
   };
   const auto refit = [&]() {
     if (fit.n < 2) return;
@@ -146,9 +171,9 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
   refit();
   for (int guard = 0; guard < 1000; ++guard) {
     const double t1 = (hi - c).dot(dir), t0 = (lo - c).dot(dir);
-    const int fwd = take(t1 + 1e-9, t1 + gap);
-    const int back = take(t0 - gap, t0 - 1e-9);
-    if (fwd + back == 0) break;
+    int grown = take(t1 + 1e-9, t1 + gap) + take(t0 - gap, t0 - 1e-9);
+    if (grown == 0) grown = takeUnseen(t1, 1.0) + takeUnseen(t0, -1.0);
+    if (grown == 0) break;
     refit();
   }
   const double t0 = (lo - c).dot(dir), t1 = (hi - c).dot(dir);
@@ -167,8 +192,11 @@ bool Sampler::fitWallAt(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
 bool Sampler::wallFitOf(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
   FitMemo& m = fit_memo_[static_cast<size_t>(slot)];
   const uint64_t gen = bb_.workingMemoryGeneration();
-  if (m.gen != gen) {
+  // The fit reads the free space too (takeUnseen): rays added since count as a new generation.
+  const long long rays = bb_.hasFreeSpace() ? bb_.freeSpaceRays() : 0;
+  if (m.gen != gen || m.rays != rays) {
     m.gen = gen;
+    m.rays = rays;
     m.ok = fitWallAt(slot, m.p0, m.p1, m.swapped);
   }
   p0 = m.p0;

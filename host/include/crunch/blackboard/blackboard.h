@@ -106,6 +106,10 @@ class Blackboard {
     ++gen_;
   }
   bool hasFreeSpace() const { return free_ != nullptr; }
+  long long freeSpaceRays() const { return free_ ? free_->rays() : 0; }
+  // A wall's negative evidence: the wall cut into pieces one leg side long, each charged as a
+  // leg core is (blackboard.cc); 0 without free space or where no ray crossed.
+  double wallFreeTerm(const Vec2& a, const Vec2& b) const;
   // The negative-evidence term of a leg-sized square at `pose` (0 without a grid): what a leg of
   // side `side` there pays for the free whisker passes through its core.
   double freeTerm(const Pose2& pose, double side) const;
@@ -291,9 +295,6 @@ class Blackboard {
   double wallEndTerms(int32_t id) const;
   // wallEndTerms over t.walls and t.wall_ends, each wall once.
   double touchedWallEndTerms(const Touched& t) const;
-  // A wall's negative evidence: the wall cut into pieces one leg side long, each charged as a
-  // leg core is (blackboard.cc).
-  double wallFreeTerm(const Vec2& a, const Vec2& b) const;
   // A footprint (a leg's, a table top's) intrudes into the wall's solid: its centre behind the
   // surface and the footprint into the band wall_solid_depth deep behind it.
   bool inWallSolid(const OrientedRect& r, const WallHyp& w) const;

@@ -138,9 +138,13 @@ struct SamplerOptions {
   // Walls (ModelParams::walled(); wall_moves.cc). Each sweep, each oriented shapelet
   // no wall explains yet seeds a data-driven wall birth with this probability: a segment fitted
   // to the collinear shapelets around it (grown along the line while the next inlier is within
-  // wall_grow_gap).
+  // wall_grow_gap, or within wall_grow_gap_unseen when no free ray crossed the line in between:
+  // docs/BLACKBOARD.md "Gaps no whisker crossed"). 1.5 m is the gap one contact pays for,
+  // log(1 + alpha_W / c_S) / wall_cost_per_m = 3.04 / 2 with the defaults: a proposal's reach,
+  // past which the energy would refuse the wall anyway. At most wall_grow_gap: off.
   double wall_birth_rate = 0.25;
   double wall_grow_gap = 0.5;
+  double wall_grow_gap_unseen = 1.5;
   // Pose moves of a wall: perpendicular shift and turn about its middle; an end moved along it;
   // the gap a split cuts out at most; the reach within which merge finds a partner; how far
   // joinWallEnd carries an end (and a partner's end) to meet another wall. The two reaches
@@ -490,6 +494,7 @@ class Sampler {
   std::vector<int32_t> wall_slots_;  // shapelets along the walls a move changes
   struct FitMemo {
     uint64_t gen = 0;  // the working memory's generation it was computed for (0: never)
+    long long rays = 0;  // and the free space's ray count
     bool ok = false;
     bool swapped = false;
     Vec2 p0{0.0, 0.0}, p1{0.0, 0.0};
