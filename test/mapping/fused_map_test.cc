@@ -73,3 +73,31 @@ TEST_CASE("Fused map: a cluster's size is its members' mean, a square's angle is
   CHECK(crunch::tablesAgree(sized(1, 1, 0, 0.45, 0.45, 0.03), sized(1, 1, 0, 0.5, 0.47, 0.04),
                             opt));
 }
+
+TEST_CASE("Fused map: tables pushed together both stay, overlapping ones do not", "[mapping]") {
+  FuseOptions opt;
+  opt.compare_sizes = true;
+  opt.min_support = 3;
+  // adjacent_tables' pair: 0.8 m wide, centres 0.8 m apart, the left one fitted 1 cm too wide
+  // (its side reaches 5 mm into the right one's).
+  std::vector<PoseMap> poses = posesSeeing({sized(2.4, 2.9, 0.0, 0.81, 0.5, 0.05)}, 4);
+  for (const PoseMap& pm : posesSeeing({sized(3.2, 2.9, 0.0, 0.8, 0.5, 0.05)}, 3))
+    poses.push_back(pm);
+  CHECK(crunch::fuseTables(poses, opt).size() == 2);
+  CHECK(crunch::tablesClash(sized(2.4, 2.9, 0.0, 0.81, 0.5, 0.05),
+                            sized(3.2, 2.9, 0.0, 0.8, 0.5, 0.05), opt) == false);
+  // 3 cm into each other: one of them is wrong, the better supported stays.
+  for (PoseMap& pm : poses)
+    for (MapTable& t : pm.tables)
+      if (t.pose.x > 3.0) t.pose.x = 3.17;
+  const auto fused = crunch::fuseTables(poses, opt);
+  REQUIRE(fused.size() == 1);
+  CHECK(fused[0].support == 4);
+  // clash_depth 0 is the strict rule: the 5 mm are a clash.
+  opt.clash_depth = 0.0;
+  CHECK(crunch::tablesClash(sized(2.4, 2.9, 0.0, 0.81, 0.5, 0.05),
+                            sized(3.2, 2.9, 0.0, 0.8, 0.5, 0.05), opt));
+  opt.clash_depth = 0.6;
+  REQUIRE_FALSE(opt.validate());
+  CHECK(opt.validate().error().message.find("clash_depth") != std::string::npos);
+}

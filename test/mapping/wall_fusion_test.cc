@@ -135,3 +135,56 @@ TEST_CASE("evaluateWalls: coverage of touched boundary, interior found, false le
     CHECK(ev.false_length == Approx(1.0).margin(0.02));
   }
 }
+
+TEST_CASE("straddle: how far a footprint reaches to each side of a wall, within its length",
+          "[mapping]") {
+  // Wall along y = 0 from x = 0 to 2, its free side (left of a->b) at y > 0.
+  const Vec2 a{0.0, 0.0}, b{2.0, 0.0};
+  // A 0.8 x 0.5 table centred 0.05 m in front: 0.30 m in front, 0.20 m through.
+  WallStraddle s = straddle({{1.0, 0.05, 0.0}, 0.8, 0.5}, a, b);
+  CHECK(s.front == Approx(0.30));
+  CHECK(s.behind == Approx(0.20));
+  // Flush with the face: nothing behind.
+  s = straddle({{1.0, 0.25, 0.0}, 0.8, 0.5}, a, b);
+  CHECK(s.front == Approx(0.50));
+  CHECK(s.behind == Approx(0.0).margin(1e-12));
+  // Past the wall's end (x > 2.4): nothing within its length.
+  s = straddle({{2.6, 0.0, 0.0}, 0.3, 0.5}, a, b);
+  CHECK(s.front == 0.0);
+  CHECK(s.behind == 0.0);
+  // Half past the end, turned 90 degrees: only the part within the length counts, which here
+  // is the whole depth either side (a square clipped at x = 2).
+  s = straddle({{2.0, 0.0, kPi / 2}, 0.4, 0.4}, a, b);
+  CHECK(s.front == Approx(0.2));
+  CHECK(s.behind == Approx(0.2));
+}
+
+TEST_CASE("keepOneWorld: a table through a wall goes unless it is the more probable of the two",
+          "[mapping]") {
+  const double band = 0.015;
+  const auto table = [](double x, double y, double score) {
+    MapTable t;
+    t.pose = {x, y, 0.0};
+    t.width = 0.8;
+    t.depth = 0.5;
+    t.score = score;
+    return t;
+  };
+  std::vector<MapWall> walls{{{0.0, 0.0}, {4.0, 0.0}, 1.0}, {{0.0, 3.0}, {0.0, 0.5}, 0.5}};
+  std::vector<MapTable> tables{
+      table(1.0, 0.05, 0.5),    // 0.20 m through the first wall (score 1.0): dropped
+      table(2.5, 0.255, 1.0),   // flush, its fit 5 mm into the face: stays
+      table(3.0, 0.24, 1.0),    // 10 mm in: within the band, stays
+      table(0.1, 2.0, 0.75)};   // through the second wall (score 0.5): the wall goes
+  keepOneWorld(tables, walls, band);
+  REQUIRE(tables.size() == 3);
+  CHECK(tables[0].pose.x == 2.5);
+  CHECK(tables[1].pose.x == 3.0);
+  CHECK(tables[2].pose.x == 0.1);
+  REQUIRE(walls.size() == 1);
+  CHECK(walls[0].score == 1.0);
+  // A table 2 cm through (past the band) at the wall's own score: the wall stays.
+  std::vector<MapTable> deep{table(1.0, 0.23, 1.0)};
+  keepOneWorld(deep, walls, band);
+  CHECK(deep.empty());
+}

@@ -12,7 +12,8 @@ Status FuseOptions::validate() const {
                            checkAbove("angle", angle, 0.0, kPi),
                            checkCount("min_support", min_support, 1, 1000000),
                            checkAbove("reach", reach, 0.0, 10.0),
-                           checkAbove("size", size, 0.0, 10.0)};
+                           checkAbove("size", size, 0.0, 10.0),
+                           checkRange("clash_depth", clash_depth, 0.0, 0.5)};
   for (const Status& s : checks) {
     if (!s) return s;
   }
@@ -111,9 +112,8 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
   // Two tables cannot overlap: keep the better supported one (clusters come best first).
   std::vector<MapTable> fused;
   for (const MapTable& c : clusters) {
-    const OrientedRect rc{c.pose, c.width, c.depth};
     bool clash = false;
-    for (const MapTable& f : fused) clash |= overlaps(rc, {f.pose, f.width, f.depth});
+    for (const MapTable& f : fused) clash |= tablesClash(c, f, opt);
     if (!clash) fused.push_back(c);
   }
 
@@ -128,6 +128,14 @@ bool tablesAgree(const MapTable& a, const MapTable& b, const FuseOptions& opt) {
   const double period = nearSquare(a, opt.size) && nearSquare(b, opt.size) ? kPi / 2 : kPi;
   return std::hypot(a.pose.x - b.pose.x, a.pose.y - b.pose.y) <= opt.radius &&
          std::abs(wrapPeriod(a.pose.theta - b.pose.theta, period)) <= opt.angle;
+}
+
+bool tablesClash(const MapTable& a, const MapTable& b, const FuseOptions& opt) {
+  const double d = opt.clash_depth;
+  const auto shrunk = [d](const MapTable& t) {
+    return OrientedRect{t.pose, std::max(0.0, t.width - d), std::max(0.0, t.depth - d)};
+  };
+  return overlaps(shrunk(a), shrunk(b));
 }
 
 bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt) {

@@ -93,9 +93,8 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
     t.depth = o.shape[1];
     t.leg = o.shape[2];
     t.score = o.score;
-    const OrientedRect r{t.pose, t.width, t.depth};
     bool clash = false;
-    for (const MapTable& f : out) clash |= overlaps(r, {f.pose, f.width, f.depth});
+    for (const MapTable& f : out) clash |= tablesClash(t, f, options.fuse);
     if (!clash) out.push_back(t);
   }
   countSupport(out, map, options.fuse);
@@ -431,6 +430,8 @@ void Mapper::infer(Map& map, uint64_t chain_seed) const {
     const auto t0 = std::chrono::steady_clock::now();
     map.tables =
         globalMap(map, options_, options_.negative_evidence ? &free_space_ : nullptr, chain_seed);
+    if (options_.model.walled())
+      keepOneWorld(map.tables, map.walls, options_.model.wall_solid_depth);
     map.stats.global_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     map.stats.global_threads =

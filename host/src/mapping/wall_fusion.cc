@@ -1,6 +1,7 @@
 #include "crunch/mapping/wall_fusion.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "crunch/blackboard/params.h"
@@ -156,6 +157,59 @@ std::vector<MapWall> fuseWalls(const std::vector<std::vector<WallHyp>>& chains,
   }
   if (opt.junction > 0.0) meetAtJunctions(out, opt.junction);
   return out;
+}
+
+WallStraddle straddle(const OrientedRect& r, const Vec2& a, const Vec2& b) {
+  WallStraddle out;
+  const double len = (b - a).norm();
+  if (len <= 0.0) return out;
+  const Vec2 u = (b - a) / len, n{-u.y(), u.x()};
+  // The footprint in the wall's frame (t along it, s to its left), clipped to 0 <= t <= len
+  // (Sutherland-Hodgman against the two ends' half-planes).
+  std::array<Vec2, 4> corners = r.corners();
+  std::array<Vec2, 8> poly{}, next{};
+  int count = 0;
+  for (const Vec2& c : corners) poly[static_cast<size_t>(count++)] = {(c - a).dot(u), (c - a).dot(n)};
+  const auto clip = [&](double sign, double bound) {  // keep sign * t <= sign * bound
+    int m = 0;
+    for (int i = 0; i < count; ++i) {
+      const Vec2 p = poly[static_cast<size_t>(i)], q = poly[static_cast<size_t>((i + 1) % count)];
+      const double dp = sign * (p.x() - bound), dq = sign * (q.x() - bound);
+      if (dp <= 0.0) next[static_cast<size_t>(m++)] = p;
+      if (dp * dq < 0.0)
+        next[static_cast<size_t>(m++)] = p + (q - p) * (dp / (dp - dq));
+    }
+    count = m;
+    poly = next;
+  };
+  clip(-1.0, 0.0);
+  clip(1.0, len);
+  for (int i = 0; i < count; ++i) {
+    out.front = std::max(out.front, poly[static_cast<size_t>(i)].y());
+    out.behind = std::max(out.behind, -poly[static_cast<size_t>(i)].y());
+  }
+  return out;
+}
+
+void keepOneWorld(std::vector<MapTable>& tables, std::vector<MapWall>& walls, double band) {
+  std::vector<bool> drop_table(tables.size(), false), drop_wall(walls.size(), false);
+  for (size_t i = 0; i < tables.size(); ++i) {
+    const MapTable& t = tables[i];
+    for (size_t j = 0; j < walls.size(); ++j) {
+      const WallStraddle s = straddle({t.pose, t.width, t.depth}, walls[j].a, walls[j].b);
+      if (std::min(s.front, s.behind) <= band) continue;
+      if (walls[j].score >= t.score) drop_table[i] = true;
+      else drop_wall[j] = true;
+    }
+  }
+  size_t k = 0;
+  for (size_t i = 0; i < tables.size(); ++i)
+    if (!drop_table[i]) tables[k++] = tables[i];
+  tables.resize(k);
+  k = 0;
+  for (size_t j = 0; j < walls.size(); ++j)
+    if (!drop_wall[j]) walls[k++] = walls[j];
+  walls.resize(k);
 }
 
 }  // namespace crunch

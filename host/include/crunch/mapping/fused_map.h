@@ -29,9 +29,14 @@ struct FuseOptions {
   // ObjectModel::kRooms; off, sizes are ignored (the paper's one size).
   bool compare_sizes = false;
   double size = 0.10;                 // metres
+  // Two fused tables cannot overlap (the better supported stays), but tables pushed together
+  // touch, and each fitted side is off by millimetres (the scene table's size errors): they
+  // clash only when one reaches more than clash_depth into the other (tablesClash).
+  double clash_depth = 0.02;          // metres
 
   // radius and reach above 0 and at most 10 m, angle above 0 and at most pi, min_support
-  // 1..1e6, size above 0 and at most 10 m. okStatus(), or an Error naming the first bad field.
+  // 1..1e6, size above 0 and at most 10 m, clash_depth 0..0.5 m. okStatus(), or an Error naming
+  // the first bad field.
   Status validate() const;
 };
 
@@ -41,6 +46,9 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
 bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt);
 // The same for map tables: their sizes too when opt.compare_sizes.
 bool tablesAgree(const MapTable& a, const MapTable& b, const FuseOptions& opt);
+// Whether two fused tables cannot both stand: their footprints, each shrunk by half of
+// opt.clash_depth on every side, overlap.
+bool tablesClash(const MapTable& a, const MapTable& b, const FuseOptions& opt);
 // Whether a table is square within `tolerance` (its angle then means modulo pi/2).
 inline bool nearSquare(const MapTable& t, double tolerance) {
   return std::abs(t.width - t.depth) <= tolerance;

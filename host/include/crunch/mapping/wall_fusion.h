@@ -30,4 +30,20 @@ struct WallFuseOptions {
 std::vector<MapWall> fuseWalls(const std::vector<std::vector<WallHyp>>& chains,
                                const WallFuseOptions& opt = {});
 
+// How far a footprint reaches to each side of a wall's line, over the part of it within the
+// wall's length: `front` on the left of a->b, `behind` on the right; both 0 when no part of it
+// lies within the length.
+struct WallStraddle {
+  double front = 0.0, behind = 0.0;
+};
+WallStraddle straddle(const OrientedRect& r, const Vec2& a, const Vec2& b);
+
+// The map is one world: no table stands through a wall. A kept table whose footprint reaches
+// more than `band` to both sides of a kept wall's line (ModelParams::wall_solid_depth, the
+// least thickness of a wall: a table flush with a wall's face, a fit a few millimetres into it,
+// stays) is dropped when the wall's score is at least its own, and the wall otherwise. Inside
+// the chains the overlap is only charged (log eps_b), so they can pass through it while they mix;
+// the fused map reports the more probable of the two (docs/BLACKBOARD.md "One world").
+void keepOneWorld(std::vector<MapTable>& tables, std::vector<MapWall>& walls, double band);
+
 }  // namespace crunch
