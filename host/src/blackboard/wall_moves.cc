@@ -193,7 +193,7 @@ bool Sampler::wallFitOf(int slot, Vec2& p0, Vec2& p1, bool& swapped) {
   FitMemo& m = fit_memo_[static_cast<size_t>(slot)];
   const uint64_t gen = bb_.workingMemoryGeneration();
   // The fit reads the free space too (takeUnseen): rays added since count as a new generation.
-  const long long rays = bb_.hasFreeSpace() ? bb_.freeSpaceRays() : 0;
+  const long long rays = bb_.freeSpaceRays();
   if (m.gen != gen || m.rays != rays) {
     m.gen = gen;
     m.rays = rays;
