@@ -255,6 +255,11 @@ TEST_CASE("Sampler: reversible-jump options are validated, acceptance names roun
   o.wall_join_reach = -0.1;
   CHECK(o.validate().error().message.find("wall_join_reach") != std::string::npos);
   o = {};
+  o.wall_grow_gap_unseen = 11.0;  // beyond any room
+  CHECK(o.validate().error().message.find("wall_grow_gap_unseen") != std::string::npos);
+  o.wall_grow_gap_unseen = 0.0;  // at most wall_grow_gap: off
+  CHECK(o.validate());
+  o = {};
   o.rj_moves = {0, 0, 0, 0, 0, 0, 0, 1, 0};  // walls' births alone: a valid (walls model) mix
   CHECK(o.validate());
   for (Acceptance a : {Acceptance::kTempered, Acceptance::kLiteral, Acceptance::kReversibleJump})
