@@ -8,6 +8,8 @@
 // (Mapper::drawSamples, beta = 1/7.5, 4 sweeps apart). Built once, not timed.
 //   BM_InfogainDecision   one InfogainPolicy::next: candidates (0.10 m lattice x 8 headings
 //                         over reachable cells + leg-aimed poses), 16 predictions each, MI.
+//   BM_InfogainDecisionNoTablePrior  the same with InfogainOptions::table_prior off.
+//   BM_HiddenLegWeights   hiddenLegWeights over the KnownSpace (part of every infogain decision).
 //   BM_EntropyDecision    one EntropyPolicy::next (paper §2.9) on the same state.
 //   BM_DistanceField      the baseline in the same run: the one Dijkstra search every
 //                         decision needs before any policy scores (the loop builds it).
@@ -81,10 +83,10 @@ MidRun& midRun() {
 void BM_InfogainDecision(benchmark::State& st) {
   MidRun& m = midRun();
   const ExploreState s = m.state();
-  Rng rng(1);
   size_t candidates = 0;
   double score = 0.0;
   for (auto _ : st) {
+    Rng rng(1);  // every iteration the same decision (the draws' orphans completed alike)
     InfogainPolicy p(PolicyOptions{});
     const Decision d = p.next(s, rng);
     candidates = p.lastCandidates().size();
@@ -96,6 +98,37 @@ void BM_InfogainDecision(benchmark::State& st) {
   st.counters["bits_per_m"] = score;
 }
 BENCHMARK(BM_InfogainDecision)->Unit(benchmark::kMillisecond);
+
+// The same decision with every unswept cell counted whole (InfogainOptions::table_prior off):
+// what the hidden tables' weights cost.
+void BM_InfogainDecisionNoTablePrior(benchmark::State& st) {
+  MidRun& m = midRun();
+  const ExploreState s = m.state();
+  InfogainOptions io;
+  io.table_prior = false;
+  double score = 0.0;
+  for (auto _ : st) {
+    Rng rng(1);
+    InfogainPolicy p(PolicyOptions{}, io);
+    const Decision d = p.next(s, rng);
+    score = d.score;
+    benchmark::DoNotOptimize(d);
+  }
+  st.counters["bits_per_m"] = score;
+}
+BENCHMARK(BM_InfogainDecisionNoTablePrior)->Unit(benchmark::kMillisecond);
+
+// hiddenLegWeights alone on the mid-run KnownSpace (the model's configurations built once per
+// call, as a decision does).
+void BM_HiddenLegWeights(benchmark::State& st) {
+  MidRun& m = midRun();
+  std::vector<float> w;
+  for (auto _ : st) {
+    hiddenLegWeights(m.known, hiddenTableOffsets(m.model, m.known.cell()), w);
+    benchmark::DoNotOptimize(w.data());
+  }
+}
+BENCHMARK(BM_HiddenLegWeights)->Unit(benchmark::kMillisecond);
 
 void BM_EntropyDecision(benchmark::State& st) {
   MidRun& m = midRun();

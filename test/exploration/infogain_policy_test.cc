@@ -3,6 +3,7 @@
 // empty room stops the run; unknown space is worth visiting; the choice is deterministic.
 #include "crunch/exploration/infogain_policy.h"
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
@@ -261,8 +262,9 @@ TEST_CASE("Infogain: the branch and bound is exact: no candidate, pruned or cut 
           "[exploration][infogain]") {
   // Half-swept room with Fig. 7's rival tables: candidates are worth draw bits near the
   // disputed legs and unswept-space bits elsewhere, with and without the path's sweep.
-  for (const bool path : {false, true}) {
-    INFO("path_sweep " << path);
+  for (const int variant : {0, 1, 2, 3}) {
+    const bool path = variant & 1, table_prior = variant & 2;
+    INFO("path_sweep " << path << ", table_prior " << table_prior);
     World w;
     w.known.markBody({1.0, 1.0}, 0.9);
     w.known.markContact({1.0, 1.5});
@@ -275,6 +277,7 @@ TEST_CASE("Infogain: the branch and bound is exact: no candidate, pruned or cut 
     State s(w, {0.8, 0.8, 0.0});
     InfogainOptions io;
     io.path_sweep = path;
+    io.table_prior = table_prior;
     InfogainPolicy policy(PolicyOptions{}, io);
     Rng rng(1);
     const Decision d = policy.next(s.state, rng);
@@ -307,4 +310,89 @@ TEST_CASE("Infogain: the branch and bound is exact: no candidate, pruned or cut 
     CHECK(scored > 1000);
     CHECK(d.score == Approx(judge.value(s.state, *d.goal).score));
   }
+}
+
+TEST_CASE("Infogain: hidden tables: the prior's configurations, each leg's three partners",
+          "[exploration][infogain]") {
+  const double cell = 0.05;
+  ModelParams paper;
+  const HiddenTableOffsets p = hiddenTableOffsets(paper, cell);
+  REQUIRE(p.weight.size() == 24);  // one size x 12 orientations x 2 mirror images
+  REQUIRE(p.dx.size() == 3 * p.weight.size());
+  double sum = 0.0;
+  for (const double w : p.weight) sum += w;
+  CHECK(sum == Approx(1.0));
+  // The paper's 0.8 x 0.5 m top on 5 cm legs: partners 0.75 m, 0.45 m and their diagonal away.
+  for (size_t c = 0; c < p.weight.size(); ++c) {
+    std::vector<double> d;
+    for (size_t q = 3 * c; q < 3 * c + 3; ++q) d.push_back(std::hypot(p.dx[q], p.dy[q]) * cell);
+    std::sort(d.begin(), d.end());
+    CHECK(d[0] == Approx(0.45).margin(cell));
+    CHECK(d[1] == Approx(0.75).margin(cell));
+    CHECK(d[2] == Approx(std::hypot(0.45, 0.75)).margin(cell));
+  }
+  ModelParams rooms;
+  rooms.objects = ObjectModel::kRooms;
+  const HiddenTableOffsets r = hiddenTableOffsets(rooms, cell);
+  CHECK(r.weight.size() > p.weight.size());
+  sum = 0.0;
+  for (const double w : r.weight) sum += w;
+  CHECK(sum == Approx(1.0));
+}
+
+TEST_CASE("Infogain: hidden tables: an unswept cell is worth the share of tables whose other legs "
+          "could stand unswept too", "[exploration][infogain]") {
+  for (const ObjectModel m : {ObjectModel::kPaper, ObjectModel::kRooms}) {
+    ModelParams model;
+    model.objects = m;
+    KnownSpace known({0.0, 0.0}, {8.0, 6.0}, 0.05);
+    // Swept: everything in x < 3 but a strip 0.3 m wide (narrower than any table's legs are apart).
+    for (double y = 0.025; y < 6.0; y += 0.05)
+      for (double x = 0.025; x < 3.0; x += 0.05)
+        if (!(x > 1.0 && x < 1.3)) known.markBody({x, y}, 0.01);
+    std::vector<float> w;
+    hiddenLegWeights(known, hiddenTableOffsets(model, known.cell()), w);
+    auto at = [&](double x, double y) {
+      int ix, iy;
+      REQUIRE(known.index({x, y}, ix, iy));
+      return w[static_cast<size_t>(iy * known.nx() + ix)];
+    };
+    CHECK(at(0.5, 3.0) == 0.0f);               // swept
+    CHECK(at(1.125, 3.0) == 0.0f);             // in the strip: no table fits its four legs there
+    CHECK(at(5.5, 3.0) == Approx(1.0f));       // deep in unswept space: every table fits
+    const float edge = at(7.975, 3.0);         // at the room's wall: only tables reaching in
+    CHECK(edge > 0.0f);
+    CHECK(edge < 0.75f);
+    const float frontier = at(3.025, 3.0);     // next to swept space: only tables reaching away
+    CHECK(frontier > 0.0f);
+    CHECK(frontier < 0.75f);
+    // A contact is a table the map already has: a leg beside it is not an undiscovered table's.
+    known.markContact({5.5, 3.0});
+    hiddenLegWeights(known, hiddenTableOffsets(model, known.cell()), w);
+    CHECK(at(5.5, 3.0) == 0.0f);
+    CHECK(at(5.5 + 0.45, 3.0) < 1.0f);  // a table with a leg here could have had one there
+  }
+}
+
+TEST_CASE("Infogain: an unswept strip no table fits in is worth nothing, open unswept space is",
+          "[exploration][infogain]") {
+  World w;  // 3 x 3 m; swept everywhere but a 0.3 m strip at x in [1.0, 1.3] and x > 2.2
+  for (double y = 0.025; y < 3.0; y += 0.05)
+    for (double x = 0.025; x < 2.2; x += 0.05)
+      if (!(x > 1.0 && x < 1.3)) w.known.markBody({x, y}, 0.01);
+  State s(w, {0.6, 1.5, 0.0});
+  InfogainPolicy with_prior(PolicyOptions{});
+  InfogainOptions off;
+  off.table_prior = false;
+  InfogainPolicy without(PolicyOptions{}, off);
+  const Pose2 strip{0.85, 1.5, 0.0}, open{2.05, 1.5, 0.0};  // whiskers reach x 1.0 .. 1.16 / 2.2 .. 2.36
+  const CandidateValue sp = with_prior.value(s.state, strip), op = with_prior.value(s.state, open);
+  const CandidateValue sw = without.value(s.state, strip), ow = without.value(s.state, open);
+  CHECK(sw.unknown_bits > 0.1);   // cells counted whole: the strip looks as good as open space
+  CHECK(sp.unknown_bits == 0.0);  // no table's four legs fit in 0.3 m
+  // Next to swept space only the tables reaching away from it can still hide: the frontier's
+  // cells count in part, the strip's not at all.
+  CHECK(op.unknown_bits > 0.01);
+  CHECK(op.unknown_m2 < ow.unknown_m2);
+  CHECK(ow.unknown_bits > op.unknown_bits);
 }

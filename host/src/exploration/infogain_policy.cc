@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <tuple>
 
@@ -21,6 +22,78 @@ double unknownOutcomeBits(double lambda, double area, double resolution) {
   const double p = std::min(0.5, 1.0 - std::exp(-lambda * area));
   const double k = std::max(1.0, area / (resolution * resolution));
   return binaryEntropyBits(p) + p * std::log2(k);
+}
+
+HiddenTableOffsets hiddenTableOffsets(const ModelParams& model, double cell) {
+  struct Size {
+    double width, depth, weight;
+  };
+  std::vector<Size> sizes;
+  double leg = model.leg_side;
+  if (!model.sized()) {
+    sizes.push_back({model.table_width, model.table_depth, 1.0});
+  } else {
+    leg = 0.5 * (model.leg_min + model.leg_max);
+    std::vector<Size> uniform;
+    const int nl = 4, ns = 2;
+    for (int i = 0; i < nl; ++i) {
+      const double l = model.size_min_side + (model.size_max_long - model.size_min_side) * (i + 0.5) / nl;
+      for (int j = 0; j < ns; ++j) {
+        const double s = model.size_min_side + (model.size_max_short - model.size_min_side) * (j + 0.5) / ns;
+        if (s <= l) uniform.push_back({l, s, 0.0});
+      }
+    }
+    const double wc = model.catalog_weight;
+    for (Size& u : uniform) u.weight = (1.0 - wc) / static_cast<double>(uniform.size());
+    sizes = uniform;
+    if (wc > 0.0) sizes.push_back({model.table_width, model.table_depth, wc});
+  }
+  HiddenTableOffsets out;
+  const int headings = 12;
+  for (const Size& z : sizes) {
+    // From the leg at corner (+x, +y): the others at (-2hx, 0), (-2hx, -2hy), (0, -2hy); the
+    // mirror image (y -> -y) is the leg at corner (+x, -y).
+    const double hx = 0.5 * (z.width - leg), hy = 0.5 * (z.depth - leg);
+    for (int mirror = 0; mirror < 2; ++mirror) {
+      const double sy = mirror ? 1.0 : -1.0;
+      const Vec2 rel[3] = {{-2.0 * hx, 0.0}, {-2.0 * hx, sy * 2.0 * hy}, {0.0, sy * 2.0 * hy}};
+      for (int h = 0; h < headings; ++h) {
+        const double a = 2.0 * kPi * h / headings, c = std::cos(a), s = std::sin(a);
+        for (const Vec2& r : rel) {
+          out.dx.push_back(static_cast<int>(std::lround((c * r.x() - s * r.y()) / cell)));
+          out.dy.push_back(static_cast<int>(std::lround((s * r.x() + c * r.y()) / cell)));
+        }
+        out.weight.push_back(z.weight / (2.0 * headings));
+      }
+    }
+  }
+  return out;
+}
+
+void hiddenLegWeights(const KnownSpace& k, const HiddenTableOffsets& o, std::vector<float>& out) {
+  const int nx = k.nx(), ny = k.ny();
+  out.assign(static_cast<size_t>(nx * ny), 0.0f);
+  // The unknown cells on a grid padded by the largest offset (the pad is outside the region:
+  // not unknown), so each look-up is one load at a fixed stride.
+  int pad = 0;
+  for (size_t q = 0; q < o.dx.size(); ++q) pad = std::max({pad, std::abs(o.dx[q]), std::abs(o.dy[q])});
+  const int stride = nx + 2 * pad;
+  std::vector<std::uint8_t> unknown(static_cast<size_t>(stride * (ny + 2 * pad)), 0);
+  for (int iy = 0; iy < ny; ++iy)
+    for (int ix = 0; ix < nx; ++ix)
+      unknown[static_cast<size_t>((iy + pad) * stride + ix + pad)] = k.at(ix, iy) == KnownSpace::Cell::kUnknown;
+  std::vector<std::ptrdiff_t> step(o.dx.size());
+  for (size_t q = 0; q < step.size(); ++q) step[q] = static_cast<std::ptrdiff_t>(o.dy[q]) * stride + o.dx[q];
+  const size_t configs = o.weight.size();
+  for (int iy = 0; iy < ny; ++iy)
+    for (int ix = 0; ix < nx; ++ix) {
+      const std::uint8_t* at = unknown.data() + (iy + pad) * stride + ix + pad;
+      if (!*at) continue;
+      double w = 0.0;
+      for (size_t c = 0; c < configs; ++c)
+        if (at[step[3 * c]] & at[step[3 * c + 1]] & at[step[3 * c + 2]]) w += o.weight[c];
+      out[static_cast<size_t>(iy * nx + ix)] = static_cast<float>(w);
+    }
 }
 
 InfogainPolicy::InfogainPolicy(const PolicyOptions& options, const InfogainOptions& infogain)
@@ -80,6 +153,22 @@ void InfogainPolicy::prepare(const ExploreState& state) {
     for (int ix = 0; ix < k.nx(); ++ix) known_cells += k.at(ix, iy) != KnownSpace::Cell::kUnknown;
   const double known_m2 = known_cells * k.cell() * k.cell();
   lambda_ = (io_.prior_legs + legs) / (io_.prior_area_m2 + known_m2);
+  if (io_.table_prior) {
+    hiddenLegWeights(k, hiddenTableOffsets(state.model, k.cell()), hidden_);
+  } else {
+    hidden_.assign(static_cast<size_t>(k.nx() * k.ny()), 0.0f);
+    for (int iy = 0; iy < k.ny(); ++iy)
+      for (int ix = 0; ix < k.nx(); ++ix)
+        if (k.at(ix, iy) == KnownSpace::Cell::kUnknown) hidden_[static_cast<size_t>(iy * k.nx() + ix)] = 1.0f;
+  }
+  // The hidden weights' summed-area table, for hiddenNear.
+  const int sx = k.nx() + 1;
+  hidden_sat_.assign(static_cast<size_t>(sx * (k.ny() + 1)), 0.0);
+  for (int iy = 0; iy < k.ny(); ++iy)
+    for (int ix = 0; ix < k.nx(); ++ix)
+      hidden_sat_[static_cast<size_t>((iy + 1) * sx + ix + 1)] =
+          hidden_[static_cast<size_t>(iy * k.nx() + ix)] + hidden_sat_[static_cast<size_t>(iy * sx + ix + 1)] +
+          hidden_sat_[static_cast<size_t>((iy + 1) * sx + ix)] - hidden_sat_[static_cast<size_t>(iy * sx + ix)];
   stamp_.assign(static_cast<size_t>(k.nx() * k.ny()), 0);
   stamp_now_ = 0;
   path_stamp_.assign(static_cast<size_t>(k.nx() * k.ny()), 0);
@@ -116,7 +205,7 @@ void InfogainPolicy::prepare(const ExploreState& state) {
 void InfogainPolicy::sweepBand(const ExploreState& state) {
   const KnownSpace& k = state.known;
   const int nx = k.nx(), ny = k.ny();
-  band_.assign(static_cast<size_t>(nx * ny), 0);
+  band_.assign(static_cast<size_t>(nx * ny), 0.0);
   if (!io_.path_sweep) return;
   // The body's disc in cell offsets (cell centres within the radius, as markBody marks), and
   // for each of the 8 steps (dx, dy) its leading edge: the offsets o with o + (dx, dy) outside
@@ -145,8 +234,9 @@ void InfogainPolicy::sweepBand(const ExploreState& state) {
       }
   }
   edge_begin_[9] = static_cast<int>(edge_dx_.size());
+  // An unknown cell counts its hidden weight (1 without table_prior), as the whisk's do.
   auto unknown = [&](int x, int y) {
-    return x >= 0 && y >= 0 && x < nx && y < ny && k.at(x, y) == KnownSpace::Cell::kUnknown;
+    return x >= 0 && y >= 0 && x < nx && y < ny ? static_cast<double>(hidden_[static_cast<size_t>(y * nx + x)]) : 0.0;
   };
   // Parents before children: the tree's cells in order of their cost.
   std::vector<int> order;
@@ -158,7 +248,7 @@ void InfogainPolicy::sweepBand(const ExploreState& state) {
   for (const int i : order) {
     const int x = i % nx, y = i / nx;
     const int p = state.travel.parent(i);
-    int n = 0;
+    double n = 0.0;
     if (p < 0) {
       for (size_t q = 0; q < disc_dx_.size(); ++q) n += unknown(x + disc_dx_[q], y + disc_dy_[q]);
     } else {
@@ -171,7 +261,7 @@ void InfogainPolicy::sweepBand(const ExploreState& state) {
   }
 }
 
-int InfogainPolicy::bandAt(const ExploreState& state, const Vec2& p) const {
+double InfogainPolicy::bandAt(const ExploreState& state, const Vec2& p) const {
   int ix, iy;
   if (!state.known.index(p, ix, iy)) return 0;
   return band_[static_cast<size_t>(iy * state.known.nx() + ix)];
@@ -282,7 +372,20 @@ double InfogainPolicy::sampleBits(const Pose2& pose) {
   return h;
 }
 
-double InfogainPolicy::positionBound(double cell, int band) const {
+double InfogainPolicy::hiddenNear(const KnownSpace& k, const Vec2& p) const {
+  // Every cell a whisk at p can count holds a ray sample within rmax_ of p: its index lies in
+  // the square of cells covering p +- rmax_.
+  const double c = k.cell();
+  const int sx = k.nx() + 1;
+  const int x0 = std::clamp(static_cast<int>(std::floor((p.x() - rmax_ - k.lo().x()) / c)), 0, k.nx());
+  const int x1 = std::clamp(static_cast<int>(std::floor((p.x() + rmax_ - k.lo().x()) / c)) + 1, 0, k.nx());
+  const int y0 = std::clamp(static_cast<int>(std::floor((p.y() - rmax_ - k.lo().y()) / c)), 0, k.ny());
+  const int y1 = std::clamp(static_cast<int>(std::floor((p.y() + rmax_ - k.lo().y()) / c)) + 1, 0, k.ny());
+  const auto at = [&](int x, int y) { return hidden_sat_[static_cast<size_t>(y * sx + x)]; };
+  return std::max(0.0, at(x1, y1) - at(x0, y1) - at(x1, y0) + at(x0, y0));
+}
+
+double InfogainPolicy::positionBound(double cell, double band) const {
   // The draws' outcome classes are unions of the groups of draws with identical objects in
   // reach, so H(Y) is at most the entropy of those groups' sizes; the unswept area one heading
   // sweeps is at most the whole ring's, and H_b grows up to p = 1/2.
@@ -295,8 +398,10 @@ double InfogainPolicy::positionBound(double cell, int band) const {
     for (const int k : count)
       if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
   }
-  // unknownOutcomeBits grows with the area.
-  const double ring = std::min(static_cast<double>(ray_cells_.size()), ring_cells_max_);
+  // unknownOutcomeBits grows with the area; each cell counts at most its hidden weight, once.
+  double weighted = 0.0;
+  for (const int q : ray_cells_) weighted += hidden_[static_cast<size_t>(q)];
+  const double ring = std::min(weighted, ring_cells_max_);
   const double area = (ring + band) * cell * cell;
   return h + unknownOutcomeBits(lambda_, area, io_.prediction.resolution) + 1e-12;
 }
@@ -335,7 +440,7 @@ double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose,
   // Requires march(state.known, pose.position()) and stampPathEnd(state, pose.position()).
   const double cell = state.known.cell();
   ++stamp_now_;
-  int unknown = 0;
+  double unknown = 0.0;
   const double amp = io_.prediction.amplitude;
   const double per_ray = 2.0 * kPi / n_rays_;
   for (const WhiskerMount& m : predictor_.mounts()) {
@@ -353,7 +458,7 @@ double InfogainPolicy::unknownBits(const ExploreState& state, const Pose2& pose,
         if (s == stamp_now_) continue;
         s = stamp_now_;
         if (path_stamp_[cq] == path_stamp_now_) continue;  // the drive sweeps it already
-        ++unknown;
+        unknown += hidden_[cq];
       }
     }
   }
@@ -444,25 +549,33 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return travel[a] < travel[b]; });
   const double draw_bits = obstacles_.size() > 1 ? std::log2(static_cast<double>(obstacles_.size())) : 0.0;
   const double cell2 = state.known.cell() * state.known.cell();
-  auto boundWithBand = [&](int band) {
-    return draw_bits + unknownOutcomeBits(lambda_, (band + ring_cells_max_) * cell2, io_.prediction.resolution) + 1e-12;
-  };
-  const double max_bits = boundWithBand(band_.empty() ? 0 : *std::max_element(band_.begin(), band_.end()));
+  // A candidate's cheap bound: the draws' log2 N and the unswept term over its band and at most
+  // the hidden weight near it (or the ring's cell count, if smaller). Suffix maxima over the
+  // travel order bound every candidate from there on.
+  std::vector<double> cheap(candidates.size());
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    const Vec2 p = candidates[i].position();
+    const double near = std::min(ring_cells_max_, hiddenNear(state.known, p));
+    cheap[i] = draw_bits + unknownOutcomeBits(lambda_, (bandAt(state, p) + near) * cell2, io_.prediction.resolution) + 1e-12;
+  }
+  std::vector<double> beyond(order.size() + 1, 0.0);
+  for (size_t j = order.size(); j-- > 0;) beyond[j] = std::max(beyond[j + 1], cheap[order[j]]);
   Decision d;
   int best = -1;
   Vec2 gathered{std::numeric_limits<double>::quiet_NaN(), 0.0};
-  double position_bound = max_bits;
-  for (const size_t ci : order) {
+  double position_bound = 0.0;
+  for (size_t j = 0; j < order.size(); ++j) {
+    const size_t ci = order[j];
     const Pose2& c = candidates[ci];
-    if (best >= 0 && max_bits / (travel[ci] + io_.whisk_cost_m) <= values_[static_cast<size_t>(best)].score)
+    if (best >= 0 && beyond[j] / (travel[ci] + io_.whisk_cost_m) <= values_[static_cast<size_t>(best)].score)
       break;
     CandidateValue v;
     v.pose = c;
     v.travel_m = travel[ci];
     if (std::isfinite(v.travel_m) && !whiskedBefore(c)) {
-      const int band = bandAt(state, c.position());
+      const double band = bandAt(state, c.position());
       // A cheap bound first, before the draws are gathered.
-      if (best >= 0 && boundWithBand(band) / (v.travel_m + io_.whisk_cost_m) <=
+      if (best >= 0 && cheap[ci] / (v.travel_m + io_.whisk_cost_m) <=
                            values_[static_cast<size_t>(best)].score) {
         values_.push_back(v);
         continue;

@@ -18,6 +18,12 @@
 //     p = 1 - exp(-lambda A), a Bernoulli outcome carrying H_b(p) bits. lambda is the
 //     Gamma-Poisson posterior mean from a Gamma(1 leg, 1 m^2) prior and the legs the draws hold
 //     (their mean count) over the area the robot knows: lambda = (1 + legs) / (1 + known m^2).
+//     Legs come four to a table, though: a table with a leg in swept space would have been
+//     touched there. So each unswept cell counts its hidden weight (hiddenLegWeights,
+//     table_prior): the prior share of the tables through a leg there (the model's sizes, every
+//     orientation, either corner) whose other three legs stand unswept too. An unswept strip
+//     narrower than any table's legs are apart counts nothing; deep unswept space counts whole;
+//     the frontier counts the tables reaching away from swept space. A is that weighted area.
 //     The two sources are added (independent: one concerns hypotheses, the other space that no
 //     hypothesis covers).
 //     With path_sweep the unswept area counts the drive as well as the whisk: on its way to c the body (and the
@@ -83,6 +89,10 @@ struct InfogainOptions {
   // docs/EXPLORATION.md ("Orphan legs: the tables a draw implies") has the measurement.
   bool complete_orphans = true;
   int completion_tries = 64;
+  // Weigh each unswept cell by the prior probability that a table with a leg there could still
+  // be undiscovered: that its other three legs stand in unswept cells of the region too
+  // (hiddenLegWeight). Off: every unswept cell counts whole (legs as independent points).
+  bool table_prior = true;
   WhiskPredictionOptions prediction;
 };
 
@@ -91,7 +101,7 @@ struct CandidateValue {
   Pose2 pose;
   double sample_bits = 0.0;   // H of the draws' outcome partition
   double unknown_bits = 0.0;  // H of touching something in unswept space (path and whisk)
-  double unknown_m2 = 0.0;    // that unswept area
+  double unknown_m2 = 0.0;    // that unswept area, each cell weighted by hiddenLegWeight
   double travel_m = 0.0;
   double score = 0.0;         // bits per metre
 };
@@ -109,6 +119,8 @@ class InfogainPolicy final : public ExplorePolicy {
   const std::vector<CandidateValue>& lastCandidates() const { return values_; }
   // lambda (legs per m^2) used by the last next() or value().
   double legDensity() const { return lambda_; }
+  // The last next()'s or value()'s hiddenLegWeight per cell (KnownSpace order, iy * nx + ix).
+  std::span<const float> hiddenWeights() const { return hidden_; }
 
  private:
   void prepare(const ExploreState& state);
@@ -120,15 +132,19 @@ class InfogainPolicy final : public ExplorePolicy {
   // march(known, pose.position()) first. Both need prepare() (the whiskers' radii).
   void march(const KnownSpace& known, const Vec2& position);
   // An upper bound on any heading's bits at the gathered and marched position, whose path
-  // sweeps `band` unknown cells.
-  double positionBound(double cell, int band) const;
+  // sweeps `band` unknown cells (weighted).
+  double positionBound(double cell, double band) const;
+  // An upper bound on the hidden weight a whisk at `p` can count: hidden_ summed over the square
+  // of cells within rmax_ of p (hidden_sat_, built by prepare()).
+  double hiddenNear(const KnownSpace& known, const Vec2& p) const;
   double unknownBits(const ExploreState& state, const Pose2& pose, double* area_m2 = nullptr);
-  // band_: unknown cells swept by the body along the shortest-path tree (path_sweep).
+  // band_: unknown cells swept by the body along the shortest-path tree (path_sweep), each
+  // counting its hidden weight.
   void sweepBand(const ExploreState& state);
   // Stamps the body's discs of the path's last cells before `position`, as far back as a whisk
   // there can reach (unknownBits then skips them).
   void stampPathEnd(const ExploreState& state, const Vec2& position);
-  int bandAt(const ExploreState& state, const Vec2& p) const;
+  double bandAt(const ExploreState& state, const Vec2& p) const;
   bool whiskedBefore(const Pose2& pose) const;
 
   PolicyOptions options_;
@@ -147,7 +163,9 @@ class InfogainPolicy final : public ExplorePolicy {
   mutable std::vector<int> bound_scratch_;
   std::vector<int> stamp_;
   int stamp_now_ = 0;
-  std::vector<int> band_;           // per cell
+  std::vector<float> hidden_;       // per cell: hiddenLegWeight (1 without table_prior)
+  std::vector<double> hidden_sat_;  // its summed-area table, (nx + 1) x (ny + 1)
+  std::vector<double> band_;        // per cell: the hidden weight of the band's unknown cells
   std::vector<int> path_stamp_;     // per cell: the position whose path end covers it
   int path_stamp_now_ = 0;
   std::vector<int> disc_dx_, disc_dy_;  // the body's disc, cell offsets
@@ -165,6 +183,29 @@ class InfogainPolicy final : public ExplorePolicy {
   std::vector<MapSample> completed_;  // next(): the state's draws with their orphans completed
   std::vector<CandidateValue> values_;
 };
+
+// The tables a leg of an undiscovered table may belong to, as cell offsets from that leg to the
+// table's other three legs with their prior weights (summing to 1): the model's sizes (the paper's
+// one; the rooms model's catalog size at catalog_weight and the uniform size prior's midpoints of
+// a 4 x 2 grid over its sides, the rest), every orientation in 12 steps and both mirror images
+// (which corner the leg is). Legs flush in the corners, leg side the model's (mid-range when
+// sized).
+struct HiddenTableOffsets {
+  std::vector<int> dx, dy;     // 3 per configuration, in cells
+  std::vector<double> weight;  // 1 per configuration
+};
+HiddenTableOffsets hiddenTableOffsets(const ModelParams& model, double cell);
+
+// Per cell of `known` (iy * nx + ix), the prior probability that a leg there belongs to a table
+// the robot has not yet touched: 0 unless the cell is unknown; else the weight of the
+// configurations whose other three legs all stand in unknown cells of the region. A table with a
+// leg in swept space would have been touched there (a leg is an obstacle the sweep would have
+// met), and one with a leg on a contact or a mapped object is a table the map already holds, so
+// the posterior of an undiscovered table given what has been swept is this restriction of its
+// uniform prior (position, orientation, size). An unswept strip narrower than any table's legs
+// are apart, or a pocket in swept space, holds no undiscovered table: sweeping it tells nothing
+// new about the map.
+void hiddenLegWeights(const KnownSpace& known, const HiddenTableOffsets& offsets, std::vector<float>& out);
 
 // H_b(p) in bits.
 double binaryEntropyBits(double p);
