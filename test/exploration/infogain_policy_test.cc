@@ -366,11 +366,18 @@ TEST_CASE("Infogain: hidden tables: an unswept cell is worth the share of tables
     const float frontier = at(3.025, 3.0);     // next to swept space: only tables reaching away
     CHECK(frontier > 0.0f);
     CHECK(frontier < 0.75f);
-    // A contact is a table the map already has: a leg beside it is not an undiscovered table's.
-    known.markContact({5.5, 3.0});
+    // Contacts along the room's wall: their cells are known, but a table may stand flush
+    // against the wall with its legs on them, so the cells beside keep their weight.
+    const float beside = at(7.925, 3.0);
+    for (double y = 2.0; y < 4.0; y += 0.05) known.markContact({7.975, y});
     hiddenLegWeights(known, hiddenTableOffsets(model, known.cell()), w);
-    CHECK(at(5.5, 3.0) == 0.0f);
-    CHECK(at(5.5 + 0.45, 3.0) < 1.0f);  // a table with a leg here could have had one there
+    CHECK(at(7.975, 3.0) == 0.0f);  // the contact's own cell is not unswept
+    CHECK(at(7.925, 3.0) == Approx(beside));
+    // Swept free beside it: tables with a leg there are ruled out.
+    for (double y = 2.025; y < 4.0; y += 0.05)
+      for (double x = 7.025; x < 7.6; x += 0.05) known.markBody({x, y}, 0.01);
+    hiddenLegWeights(known, hiddenTableOffsets(model, known.cell()), w);
+    CHECK(at(7.925, 3.0) < beside);
   }
 }
 
@@ -381,10 +388,10 @@ TEST_CASE("Infogain: an unswept strip no table fits in is worth nothing, open un
     for (double x = 0.025; x < 2.2; x += 0.05)
       if (!(x > 1.0 && x < 1.3)) w.known.markBody({x, y}, 0.01);
   State s(w, {0.6, 1.5, 0.0});
-  InfogainPolicy with_prior(PolicyOptions{});
-  InfogainOptions off;
-  off.table_prior = false;
-  InfogainPolicy without(PolicyOptions{}, off);
+  InfogainOptions on;
+  on.table_prior = true;
+  InfogainPolicy with_prior(PolicyOptions{}, on);
+  InfogainPolicy without(PolicyOptions{});  // the default: cells counted whole
   const Pose2 strip{0.85, 1.5, 0.0}, open{2.05, 1.5, 0.0};  // whiskers reach x 1.0 .. 1.16 / 2.2 .. 2.36
   const CandidateValue sp = with_prior.value(s.state, strip), op = with_prior.value(s.state, open);
   const CandidateValue sw = without.value(s.state, strip), ow = without.value(s.state, open);
