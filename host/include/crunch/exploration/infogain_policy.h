@@ -19,11 +19,12 @@
 //     Gamma-Poisson posterior mean from a Gamma(1 leg, 1 m^2) prior and the legs the draws hold
 //     (their mean count) over the area the robot knows: lambda = (1 + legs) / (1 + known m^2).
 //     Legs come four to a table, though: a table with a leg in swept space would have been
-//     touched there. So each unswept cell counts its hidden weight (hiddenLegWeights,
-//     table_prior): the prior share of the tables through a leg there (the model's sizes, every
-//     orientation, either corner) whose other three legs stand unswept too. An unswept strip
-//     narrower than any table's legs are apart counts nothing; deep unswept space counts whole;
-//     the frontier counts the tables reaching away from swept space. A is that weighted area.
+//     touched there. With table_prior (off by default) each unswept cell counts its hidden weight
+//     (hiddenLegWeights): the prior share of the tables through a leg there (the model's sizes,
+//     every orientation, either corner) whose other three legs stand on cells not swept free.
+//     An unswept strip narrower than any table's legs are apart counts nothing, deep unswept
+//     space counts whole, the frontier counts the tables reaching away from swept space, and A
+//     is that weighted area. Off, every unswept cell counts 1.
 //     The two sources are added (independent: one concerns hypotheses, the other space that no
 //     hypothesis covers).
 //     With path_sweep the unswept area counts the drive as well as the whisk: on its way to c the body (and the
