@@ -94,7 +94,7 @@ struct InfogainOptions {
   // be undiscovered: that its other three legs stand on cells of the region not swept free
   // (hiddenLegWeights). Off (the default): every unswept cell counts whole, legs as independent
   // points. Measured on (rooms model, seeds 1-5), it cuts the mean travel to recall 0.9 on
-  // l_room from 19.0 to 13.6 m and on adjacent_tables from 32.1 to 23.0 m, but never finds
+  // l_room from 18.3 to 13.6 m and on adjacent_tables from 32.1 to 23.0 m, but never finds
   // table_at_wall's tables flush against the walls within 50 m: once discovery is valued as the
   // prior says, the draws' residual disagreement about a mapped table (0.5-1.4 bits a whisk)
   // outbids the thin strips along the walls, where few orientations of a table fit
