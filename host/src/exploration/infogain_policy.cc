@@ -148,19 +148,18 @@ void InfogainPolicy::prepare(const ExploreState& state) {
   }
   if (!state.samples.empty()) legs /= static_cast<double>(state.samples.size());
   const KnownSpace& k = state.known;
+  // Each unknown cell counts 1, or its hidden weight with table_prior.
   int known_cells = 0;
+  hidden_.assign(static_cast<size_t>(k.nx() * k.ny()), 0.0f);
   for (int iy = 0; iy < k.ny(); ++iy)
-    for (int ix = 0; ix < k.nx(); ++ix) known_cells += k.at(ix, iy) != KnownSpace::Cell::kUnknown;
+    for (int ix = 0; ix < k.nx(); ++ix) {
+      const bool unknown = k.at(ix, iy) == KnownSpace::Cell::kUnknown;
+      known_cells += !unknown;
+      hidden_[static_cast<size_t>(iy * k.nx() + ix)] = unknown ? 1.0f : 0.0f;
+    }
   const double known_m2 = known_cells * k.cell() * k.cell();
   lambda_ = (io_.prior_legs + legs) / (io_.prior_area_m2 + known_m2);
-  if (io_.table_prior) {
-    hiddenLegWeights(k, hiddenTableOffsets(state.model, k.cell()), hidden_);
-  } else {
-    hidden_.assign(static_cast<size_t>(k.nx() * k.ny()), 0.0f);
-    for (int iy = 0; iy < k.ny(); ++iy)
-      for (int ix = 0; ix < k.nx(); ++ix)
-        if (k.at(ix, iy) == KnownSpace::Cell::kUnknown) hidden_[static_cast<size_t>(iy * k.nx() + ix)] = 1.0f;
-  }
+  if (io_.table_prior) hiddenLegWeights(k, hiddenTableOffsets(state.model, k.cell()), hidden_);
   // The hidden weights' summed-area table, for hiddenNear.
   const int sx = k.nx() + 1;
   hidden_sat_.assign(static_cast<size_t>(sx * (k.ny() + 1)), 0.0);

@@ -110,12 +110,7 @@ std::vector<MapTable> fuseTables(const std::vector<PoseMap>& per_pose, const Fus
   }
 
   // Two tables cannot overlap: keep the better supported one (clusters come best first).
-  std::vector<MapTable> fused;
-  for (const MapTable& c : clusters) {
-    bool clash = false;
-    for (const MapTable& f : fused) clash |= tablesClash(c, f, opt);
-    if (!clash) fused.push_back(c);
-  }
+  std::vector<MapTable> fused = withoutClashes(clusters, opt);
 
   scoreBySupport(fused, per_pose, opt);
   return fused;
@@ -136,6 +131,14 @@ bool tablesClash(const MapTable& a, const MapTable& b, const FuseOptions& opt) {
     return OrientedRect{t.pose, std::max(0.0, t.width - d), std::max(0.0, t.depth - d)};
   };
   return overlaps(shrunk(a), shrunk(b));
+}
+
+std::vector<MapTable> withoutClashes(const std::vector<MapTable>& best_first, const FuseOptions& opt) {
+  std::vector<MapTable> kept;
+  for (const MapTable& t : best_first)
+    if (std::none_of(kept.begin(), kept.end(), [&](const MapTable& k) { return tablesClash(t, k, opt); }))
+      kept.push_back(t);
+  return kept;
 }
 
 bool tablesAgree(const Pose2& a, const Pose2& b, const FuseOptions& opt) {

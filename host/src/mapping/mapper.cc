@@ -85,7 +85,7 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
     mo.shape_tolerance = options.fuse.size;
     mo.square_half_period = true;
   }
-  std::vector<MapTable> out;
+  std::vector<MapTable> likely;  // best first
   for (const MarginalObject& o : posteriorMarginals(objects, n_samples, mo)) {
     if (o.score <= options.marginal_keep) continue;
     MapTable t = modelTable(o.pose, options.model);
@@ -93,10 +93,9 @@ std::vector<MapTable> marginalMap(Map& map, const MappingOptions& options,
     t.depth = o.shape[1];
     t.leg = o.shape[2];
     t.score = o.score;
-    bool clash = false;
-    for (const MapTable& f : out) clash |= tablesClash(t, f, options.fuse);
-    if (!clash) out.push_back(t);
+    likely.push_back(t);
   }
+  std::vector<MapTable> out = withoutClashes(likely, options.fuse);
   countSupport(out, map, options.fuse);
   return out;
 }

@@ -49,6 +49,9 @@ bool tablesAgree(const MapTable& a, const MapTable& b, const FuseOptions& opt);
 // Whether two fused tables cannot both stand: their footprints, each shrunk by half of
 // opt.clash_depth on every side, overlap.
 bool tablesClash(const MapTable& a, const MapTable& b, const FuseOptions& opt);
+// Two tables cannot both stand: of `best_first` (most probable first), each table that clashes
+// with one kept before it is dropped (eq. 25). The vote and the marginal map both end so.
+std::vector<MapTable> withoutClashes(const std::vector<MapTable>& best_first, const FuseOptions& opt);
 // Whether a table is square within `tolerance` (its angle then means modulo pi/2).
 inline bool nearSquare(const MapTable& t, double tolerance) {
   return std::abs(t.width - t.depth) <= tolerance;
