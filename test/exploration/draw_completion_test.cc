@@ -181,3 +181,29 @@ TEST_CASE("Orphan completion: completed draws disagree where the orphan's other 
   CHECK(raw_best == 0.0);
   CHECK(completed_best > 0.5);
 }
+
+TEST_CASE("Orphan completion: repeats merged: a table held twice is one, an orphan on a table's "
+          "leg is that leg, an orphan elsewhere stays",
+          "[exploration][completion]") {
+  MapTable t;
+  t.pose = {1.5, 1.5, 0.4};
+  MapTable twin = t;
+  twin.pose.x += 0.004;
+  MapTable beside = t;  // side by side with t, 5 mm apart: pushed together, not overlapping
+  const Vec2 next_to = t.pose.toWorld(Vec2{t.width + 0.005, 0.0});
+  beside.pose = {next_to.x(), next_to.y(), t.pose.theta};
+  const Vec2 corner = t.pose.toWorld(ModelParams::cornerOffset(2, t.width, t.depth, t.leg));
+  MapSample draw;
+  draw.tables = {t, twin, beside};
+  draw.legs.push_back({{corner.x() + 0.01, corner.y() - 0.01, t.pose.theta}, 0.05});  // t's leg
+  draw.legs.push_back(kOrphan);  // (2.0, 2.0): no table's leg there
+  const FuseOptions fuse;
+  CHECK(mergeRepeats(draw, fuse) == 2);
+  REQUIRE(draw.tables.size() == 2);
+  CHECK(draw.tables[0].pose.x == t.pose.x);  // the first of the twins stays
+  CHECK(draw.tables[1].pose.x == beside.pose.x);
+  REQUIRE(draw.legs.size() == 1);
+  CHECK(draw.legs[0].pose.x == kOrphan.pose.x);
+  // Nothing repeated: nothing removed.
+  CHECK(mergeRepeats(draw, fuse) == 0);
+}

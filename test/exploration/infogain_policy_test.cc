@@ -262,9 +262,9 @@ TEST_CASE("Infogain: the branch and bound is exact: no candidate, pruned or cut 
           "[exploration][infogain]") {
   // Half-swept room with Fig. 7's rival tables: candidates are worth draw bits near the
   // disputed legs and unswept-space bits elsewhere, with and without the path's sweep.
-  for (const int variant : {0, 1, 2, 3}) {
-    const bool path = variant & 1, table_prior = variant & 2;
-    INFO("path_sweep " << path << ", table_prior " << table_prior);
+  for (const int variant : {0, 1, 2, 3, 4, 7}) {
+    const bool path = variant & 1, table_prior = variant & 2, report = variant & 4;
+    INFO("path_sweep " << path << ", table_prior " << table_prior << ", report_level " << report);
     World w;
     w.known.markBody({1.0, 1.0}, 0.9);
     w.known.markContact({1.0, 1.5});
@@ -278,6 +278,7 @@ TEST_CASE("Infogain: the branch and bound is exact: no candidate, pruned or cut 
     InfogainOptions io;
     io.path_sweep = path;
     io.table_prior = table_prior;
+    io.report_level = io.merge_repeats = report;
     InfogainPolicy policy(PolicyOptions{}, io);
     Rng rng(1);
     const Decision d = policy.next(s.state, rng);
@@ -402,4 +403,82 @@ TEST_CASE("Infogain: an unswept strip no table fits in is worth nothing, open un
   CHECK(op.unknown_bits > 0.01);
   CHECK(op.unknown_m2 < ow.unknown_m2);
   CHECK(ow.unknown_bits > op.unknown_bits);
+}
+
+TEST_CASE("Infogain: report level: draws that report one map tell it nothing where their "
+          "contacts differ, rival maps keep their bits",
+          "[exploration][infogain]") {
+  // Everything swept, L1 and L2 touched. Half the draws hold kNorth, half kNorth 3 cm east: one
+  // map at the map's tolerance (0.10 m), yet a whisker touching a leg touches it twice the
+  // sensor's resolution apart in the two halves (or, at a graze, in one half only).
+  World w;
+  knownRoomWithTouchedLegs(w);
+  MapTable east = kNorth;
+  east.pose.x += 0.03;
+  for (int i = 0; i < 16; ++i) w.samples.push_back({{i % 2 ? kNorth : east}, {}, {}});
+  State s(w, {2.6, 2.6, 0.0});
+  InfogainOptions draw_level, report_level;
+  report_level.report_level = true;
+  InfogainPolicy by_draw(PolicyOptions{}, draw_level), by_report(PolicyOptions{}, report_level);
+  // Poses facing each of kNorth's legs from whisker reach.
+  int differ = 0;
+  for (const MapTable& t : {kNorth}) {
+    for (const OrientedRect& leg : legSquares(t)) {
+      for (int a = 0; a < 72; ++a) {
+        for (const double r : {0.2, 0.25, 0.3}) {
+          const double ang = 2.0 * kPi * a / 72;
+          const Vec2 p = leg.pose.position() - r * Vec2{std::cos(ang), std::sin(ang)};
+          if (s.state.costmap.blocked(p)) continue;
+          const Pose2 pose{p.x(), p.y(), ang};
+          const double drawn = by_draw.value(s.state, pose).sample_bits;
+          CHECK(by_report.value(s.state, pose).sample_bits == 0.0);
+          differ += drawn > 0.5;
+        }
+      }
+    }
+  }
+  INFO("poses where the two halves' contacts differ: " << differ);
+  CHECK(differ > 100);  // the draw-level value counts them (a whole bit each)
+
+  // Fig. 7's rivals report different maps: the disputed leg is worth its bit either way.
+  World rivals;
+  knownRoomWithRivalDraws(rivals);
+  State r(rivals, {2.6, 2.6, 0.0});
+  InfogainPolicy policy(PolicyOptions{}, report_level);
+  Rng rng(1);
+  const Decision d = policy.next(r.state, rng);
+  REQUIRE(d.goal);
+  CHECK(reachesDisputedLeg(*d.goal));
+  CHECK(policy.value(r.state, *d.goal).sample_bits == Approx(1.0));
+}
+
+TEST_CASE("Infogain: the same reported map: tables and walls within the map's tolerance, one "
+          "to one",
+          "[exploration][infogain]") {
+  const FuseOptions tol;
+  MapTable a = kNorth, b = kNorth;
+  b.pose.x += 0.09;
+  b.pose.theta += 0.1;
+  MapTable far = kNorth;
+  far.pose.x += 0.11;
+  const MapWall w1{{0.0, 1.0}, {2.0, 1.0}, 1.0};
+  const MapWall w1_reversed{{2.05, 1.0}, {0.0, 1.05}, 1.0};
+  const MapWall w1_longer{{0.0, 1.0}, {2.3, 1.0}, 1.0};
+  const std::vector<MapTable> one_a{a}, one_b{b}, one_far{far}, two{a, kSouth}, two_swapped{kSouth, b};
+  const std::vector<MapWall> none, wall{w1}, wall_rev{w1_reversed}, wall_long{w1_longer};
+  CHECK(sameReportedMap(one_a, none, one_b, none, tol));
+  CHECK_FALSE(sameReportedMap(one_a, none, one_far, none, tol));
+  CHECK(sameReportedMap(two, none, two_swapped, none, tol));
+  CHECK_FALSE(sameReportedMap(one_a, none, two, none, tol));
+  CHECK(sameReportedMap(one_a, wall, one_b, wall_rev, tol));
+  CHECK_FALSE(sameReportedMap(one_a, wall, one_a, wall_long, tol));
+  CHECK_FALSE(sameReportedMap(one_a, wall, one_a, none, tol));
+  // Sizes count when the model sizes its tables.
+  FuseOptions sized = tol;
+  sized.compare_sizes = true;
+  MapTable wider = a;
+  wider.width += 0.15;
+  const std::vector<MapTable> one_wider{wider};
+  CHECK(sameReportedMap(one_a, none, one_wider, none, tol));
+  CHECK_FALSE(sameReportedMap(one_a, none, one_wider, none, sized));
 }

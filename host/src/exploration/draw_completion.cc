@@ -1,5 +1,6 @@
 #include "crunch/exploration/draw_completion.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -74,6 +75,24 @@ int completeOrphanLegs(MapSample& draw, const KnownSpace& known, const ModelPara
     }
   }
   return completed;
+}
+
+int mergeRepeats(MapSample& draw, const FuseOptions& fuse) {
+  const size_t before = draw.tables.size() + draw.legs.size();
+  draw.tables = withoutClashes(draw.tables, fuse);
+  const auto onTableLeg = [&](const MapLeg& leg) {
+    for (const MapTable& t : draw.tables) {
+      const double c = std::cos(t.pose.theta), s = std::sin(t.pose.theta);
+      const double near = std::max(leg.side, t.leg);
+      for (int i = 0; i < 4; ++i) {
+        const Vec2 q = t.pose.toWorld(ModelParams::cornerOffset(i, t.width, t.depth, t.leg), c, s);
+        if ((q - leg.pose.position()).squaredNorm() < near * near) return true;
+      }
+    }
+    return false;
+  };
+  draw.legs.erase(std::remove_if(draw.legs.begin(), draw.legs.end(), onTableLeg), draw.legs.end());
+  return static_cast<int>(before - draw.tables.size() - draw.legs.size());
 }
 
 }  // namespace crunch::exploration

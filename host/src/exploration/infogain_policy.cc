@@ -147,6 +147,7 @@ void InfogainPolicy::prepare(const ExploreState& state) {
     legs += static_cast<double>(obstacles_[i].legs.size());
   }
   if (!state.samples.empty()) legs /= static_cast<double>(state.samples.size());
+  reportClasses(state);
   const KnownSpace& k = state.known;
   // Each unknown cell counts 1, or its hidden weight with table_prior.
   int known_cells = 0;
@@ -332,6 +333,65 @@ void InfogainPolicy::gather(const Vec2& position) {
   }
 }
 
+void InfogainPolicy::reportClasses(const ExploreState& state) {
+  // Greedy classes, as the outcomes' (a draw joins the first class whose first draw reports the
+  // same map). Without report_level every draw is its own class.
+  const size_t n = state.samples.size();
+  report_of_.assign(n, 0);
+  report_count_.clear();
+  std::vector<std::vector<MapTable>> tables(n);
+  FuseOptions tol = io_.report;
+  tol.compare_sizes = state.model.sized();
+  if (io_.report_level)
+    for (size_t i = 0; i < n; ++i) tables[i] = withoutClashes(state.samples[i].tables, tol);
+  std::vector<size_t> first;
+  for (size_t i = 0; i < n; ++i) {
+    size_t c = first.size();
+    if (io_.report_level)
+      for (c = 0; c < first.size(); ++c)
+        if (sameReportedMap(tables[first[c]], obstacles_[first[c]].walls, tables[i],
+                            obstacles_[i].walls, tol))
+          break;
+    if (c == first.size()) {
+      first.push_back(i);
+      report_count_.push_back(0);
+    }
+    ++report_count_[c];
+    report_of_[i] = static_cast<int>(c);
+  }
+  report_bits_ = 0.0;
+  for (const int k : report_count_) {
+    const double p = k / static_cast<double>(n);
+    report_bits_ -= p * std::log2(p);
+  }
+}
+
+bool sameReportedMap(std::span<const MapTable> a_tables, std::span<const MapWall> a_walls,
+                     std::span<const MapTable> b_tables, std::span<const MapWall> b_walls,
+                     const FuseOptions& tol) {
+  if (a_tables.size() != b_tables.size() || a_walls.size() != b_walls.size()) return false;
+  std::vector<char> used(std::max(b_tables.size(), b_walls.size()), 0);
+  for (const MapTable& t : a_tables) {
+    size_t m = 0;
+    while (m < b_tables.size() && (used[m] || !tablesAgree(t, b_tables[m], tol))) ++m;
+    if (m == b_tables.size()) return false;
+    used[m] = 1;
+  }
+  std::fill(used.begin(), used.end(), 0);
+  const double r2 = tol.radius * tol.radius;
+  const auto near = [r2](const Vec2& p, const Vec2& q) { return (p - q).squaredNorm() <= r2; };
+  for (const MapWall& w : a_walls) {
+    size_t m = 0;
+    const auto same = [&](const MapWall& v) {
+      return (near(w.a, v.a) && near(w.b, v.b)) || (near(w.a, v.b) && near(w.b, v.a));
+    };
+    while (m < b_walls.size() && (used[m] || !same(b_walls[m]))) ++m;
+    if (m == b_walls.size()) return false;
+    used[m] = 1;
+  }
+  return true;
+}
+
 double InfogainPolicy::sampleBits(const Pose2& pose) {
   // Requires gather(pose.position()).
   const size_t n = obstacles_.size();
@@ -364,11 +424,24 @@ double InfogainPolicy::sampleBits(const Pose2& pose) {
     cls_of_[i] = static_cast<int>(c);
   }
   double h = 0.0;
-  for (size_t c = 0; c < rep.size(); ++c) {
-    const double p = static_cast<double>(cls_count_[c]) / static_cast<double>(n);
-    h -= p * std::log2(p);
+  if (!io_.report_level) {
+    for (size_t c = 0; c < rep.size(); ++c) {
+      const double p = static_cast<double>(cls_count_[c]) / static_cast<double>(n);
+      h -= p * std::log2(p);
+    }
+    return h;
   }
-  return h;
+  // I(Y; R) from the joint counts of outcome class and report class.
+  const size_t ny = rep.size(), nr = report_count_.size();
+  joint_.assign(ny * nr, 0);
+  for (size_t i = 0; i < n; ++i)
+    ++joint_[static_cast<size_t>(cls_of_[i]) * nr + static_cast<size_t>(report_of_[i])];
+  const double dn = static_cast<double>(n);
+  for (size_t c = 0; c < ny; ++c)
+    for (size_t r = 0; r < nr; ++r)
+      if (const int j = joint_[c * nr + r]; j > 0)
+        h += (j / dn) * std::log2(j * dn / (static_cast<double>(cls_count_[c]) * report_count_[r]));
+  return std::max(0.0, h);
 }
 
 double InfogainPolicy::hiddenNear(const KnownSpace& k, const Vec2& p) const {
@@ -396,6 +469,7 @@ double InfogainPolicy::positionBound(double cell, double band) const {
     for (const int u : uniq_) ++count[static_cast<size_t>(u)];
     for (const int k : count)
       if (k > 0) h -= (k / static_cast<double>(n)) * std::log2(k / static_cast<double>(n));
+    h = std::min(h, report_bits_);  // I(Y; R) <= H(R)
   }
   // unknownOutcomeBits grows with the area; each cell counts at most its hidden weight, once.
   double weighted = 0.0;
@@ -495,10 +569,15 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   whisks_seen_ = given.whisks;
   arrival_tol_ = given.arrival_tolerance;
   ExploreState state = given;
-  if (io_.complete_orphans) {
+  if (io_.complete_orphans || io_.merge_repeats) {
     completed_.assign(given.samples.begin(), given.samples.end());
-    for (MapSample& draw : completed_)
-      completeOrphanLegs(draw, given.known, given.model, rng, io_.completion_tries);
+    FuseOptions tol = io_.report;
+    tol.compare_sizes = given.model.sized();
+    for (MapSample& draw : completed_) {
+      if (io_.merge_repeats) mergeRepeats(draw, tol);
+      if (io_.complete_orphans)
+        completeOrphanLegs(draw, given.known, given.model, rng, io_.completion_tries);
+    }
     state.samples = completed_;
   }
   prepare(state);
@@ -546,7 +625,7 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   std::vector<size_t> order(candidates.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return travel[a] < travel[b]; });
-  const double draw_bits = obstacles_.size() > 1 ? std::log2(static_cast<double>(obstacles_.size())) : 0.0;
+  const double draw_bits = obstacles_.size() > 1 ? std::min(report_bits_, std::log2(static_cast<double>(obstacles_.size()))) : 0.0;
   const double cell2 = state.known.cell() * state.known.cell();
   // A candidate's cheap bound: the draws' log2 N and the unswept term over its band and at most
   // the hidden weight near it (or the ring's cell count, if smaller). Suffix maxima over the

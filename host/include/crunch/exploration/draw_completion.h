@@ -31,6 +31,7 @@
 #include "crunch/blackboard/params.h"
 #include "crunch/core/rng.h"
 #include "crunch/exploration/known_space.h"
+#include "crunch/mapping/fused_map.h"
 #include "crunch/mapping/map.h"
 
 namespace crunch::exploration {
@@ -40,5 +41,16 @@ namespace crunch::exploration {
 // Returns the number completed.
 int completeOrphanLegs(MapSample& draw, const KnownSpace& known, const ModelParams& model,
                        Rng& rng, int tries = 64);
+
+// One world per draw (docs/EXPLORATION.md "What the map reports"): a chain at the posterior's
+// temperature may hold one table twice (eq. 25 charges two overlapping tops only log eps_b) or
+// keep an orphan leg on a table's own leg (the same contacts explained twice). Neither is a second
+// object: of the draw's tables, each that clashes with one kept before it is dropped
+// (withoutClashes, the fused map's rule), and an orphan leg whose centre lies within a leg's side
+// of a kept table's leg centre is that leg, and is dropped. Left alone, the orphan would be
+// completed into a table beside the one it stands under, which nothing supports, and the
+// duplicate's legs, millimetres off, would make the draws' predictions differ where they agree.
+// Returns the number of tables and legs removed.
+int mergeRepeats(MapSample& draw, const FuseOptions& fuse);
 
 }  // namespace crunch::exploration
