@@ -333,6 +333,12 @@ void InfogainPolicy::gather(const Vec2& position) {
   }
 }
 
+FuseOptions InfogainPolicy::reportTolerance(const ModelParams& model) const {
+  FuseOptions tol = io_.report;
+  tol.compare_sizes = model.sized();
+  return tol;
+}
+
 void InfogainPolicy::reportClasses(const ExploreState& state) {
   // Greedy classes, as the outcomes' (a draw joins the first class whose first draw reports the
   // same map). Without report_level every draw is its own class.
@@ -340,8 +346,7 @@ void InfogainPolicy::reportClasses(const ExploreState& state) {
   report_of_.assign(n, 0);
   report_count_.clear();
   std::vector<std::vector<MapTable>> tables(n);
-  FuseOptions tol = io_.report;
-  tol.compare_sizes = state.model.sized();
+  const FuseOptions tol = reportTolerance(state.model);
   if (io_.report_level)
     for (size_t i = 0; i < n; ++i) tables[i] = withoutClashes(state.samples[i].tables, tol);
   std::vector<size_t> first;
@@ -571,8 +576,7 @@ Decision InfogainPolicy::next(const ExploreState& given, Rng& rng) {
   ExploreState state = given;
   if (io_.complete_orphans || io_.merge_repeats) {
     completed_.assign(given.samples.begin(), given.samples.end());
-    FuseOptions tol = io_.report;
-    tol.compare_sizes = given.model.sized();
+    const FuseOptions tol = reportTolerance(given.model);
     for (MapSample& draw : completed_) {
       if (io_.merge_repeats) mergeRepeats(draw, tol);
       if (io_.complete_orphans)

@@ -163,6 +163,8 @@ class InfogainPolicy final : public ExplorePolicy {
   double sampleBits(const Pose2& pose);
   // report_of_, report_count_ and report_bits_ for the state's draws (after obstacles_).
   void reportClasses(const ExploreState& state);
+  // The map's tolerance for `model`: InfogainOptions::report, sizes compared when it sizes tables.
+  FuseOptions reportTolerance(const ModelParams& model) const;
   // The unknown cells each ray from `position` would sweep; unknownBits(pose) needs
   // march(known, pose.position()) first. Both need prepare() (the whiskers' radii).
   void march(const KnownSpace& known, const Vec2& position);
