@@ -115,6 +115,58 @@ TEST_CASE("Orphan completion: no completed leg in swept floor or outside, no ove
   CHECK(max_w > 1.5);
 }
 
+TEST_CASE("Orphan completion: sizes from the rooms model's own prior, the catalog's at its "
+          "weight", "[exploration][completion]") {
+  // On unknown floor every proposal is admissible, so the completed sizes are the prior's: the
+  // catalog's size (each side within 5 sigma of it) in a share catalog_weight of the draws, the
+  // uniform part otherwise (where a side within 2.5 cm of the catalog's has probability < 5 %).
+  KnownSpace known({0.0, 0.0}, {4.0, 4.0}, 0.05);
+  ModelParams model;
+  model.objects = ObjectModel::kRooms;
+  const auto catalog = [&](const MapTable& t) {
+    const double tol = 5.0 * model.catalog_sigma;
+    return (std::abs(t.width - model.table_width) < tol && std::abs(t.depth - model.table_depth) < tol) ||
+           (std::abs(t.depth - model.table_width) < tol && std::abs(t.width - model.table_depth) < tol);
+  };
+  for (const double w : {0.0, 0.5, 0.9}) {
+    model.catalog_weight = w;
+    Rng rng(13);
+    const int n = 2000;
+    int hits = 0;
+    for (int i = 0; i < n; ++i) {
+      MapSample s = orphanDraw();
+      REQUIRE(completeOrphanLegs(s, known, model, rng) == 1);
+      hits += catalog(s.tables[0]);
+    }
+    INFO("catalog_weight " << w << ": " << hits << " of " << n);
+    // Binomial sd at most sqrt(n / 4) ~ 22; 6 sd either side.
+    CHECK(std::abs(hits - w * n) < 135);
+  }
+  // In a corner 0.85 x 0.55 m against two walls, the floor around swept, with the leg at its
+  // inner corner: one placement of eight fits, by the catalog's top or by the uniform part's
+  // few small ones (about 6 % of its mass), so about 94 % of the completions are the catalog's.
+  KnownSpace corner({0.0, 0.0}, {4.0, 4.0}, 0.05);
+  for (double y = 0.025; y < 4.0; y += 0.05)
+    for (double x = 0.025; x < 4.0; x += 0.05)
+      if (!(x > 3.15 && y < 0.55)) corner.markBody({x, y}, 0.01);
+  model.catalog_weight = 0.5;
+  Rng rng(17);
+  int completed = 0, of_catalog = 0;
+  for (int i = 0; i < 400; ++i) {
+    MapSample s;
+    s.legs.push_back(MapLeg{{3.225, 0.475, 0.0}, 0.05});
+    completed += completeOrphanLegs(s, corner, model, rng);
+    for (const MapTable& t : s.tables) {
+      of_catalog += catalog(t);
+      CHECK(t.pose.x > 3.2);
+      CHECK(t.pose.y < 0.5);
+    }
+  }
+  INFO(of_catalog << " of " << completed << " completions the catalog's");
+  CHECK(completed > 300);  // 64 tries each, about 1 in 15 of the proposals fits
+  CHECK(of_catalog > 0.85 * completed);
+}
+
 TEST_CASE("Orphan completion: a leg boxed in by swept floor stays an orphan, deterministically",
           "[exploration][completion]") {
   KnownSpace known({0.0, 0.0}, {4.0, 4.0}, 0.05);

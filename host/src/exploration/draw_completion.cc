@@ -16,12 +16,20 @@ OrientedRect topOf(const MapTable& t) { return {t.pose, t.width, t.depth}; }
 MapTable propose(const MapLeg& leg, const ModelParams& model, Rng& rng) {
   MapTable t;
   if (model.sized()) {
-    // Uniform over the prior's region {min <= shorter <= max_short, longer <= max_long} (the
-    // square [min, max_long]^2 cut by the shorter side's bound; rejection inside it is uniform).
-    do {
-      t.width = rng.uniform(model.size_min_side, model.size_max_long);
-      t.depth = rng.uniform(model.size_min_side, model.size_max_long);
-    } while (std::min(t.width, t.depth) > model.size_max_short);
+    // The mixture (1 - w) U + w N of ModelParams: with weight catalog_weight the catalog's size,
+    // each side Gaussian about it (catalog_sigma); else uniform over the prior's region
+    // {min <= shorter <= max_short, longer <= max_long} (the square [min, max_long]^2 cut by the
+    // shorter side's bound; rejection inside it is uniform). Which way round the catalog's top
+    // lies is the placement's (j below).
+    if (rng.uniform() < model.catalog_weight) {
+      t.width = rng.normal(model.table_width, model.catalog_sigma);
+      t.depth = rng.normal(model.table_depth, model.catalog_sigma);
+    } else {
+      do {
+        t.width = rng.uniform(model.size_min_side, model.size_max_long);
+        t.depth = rng.uniform(model.size_min_side, model.size_max_long);
+      } while (std::min(t.width, t.depth) > model.size_max_short);
+    }
     t.leg = leg.side;
   } else {
     t.width = model.table_width;

@@ -16,8 +16,9 @@
 //   draw]
 // by rejection: T's axes along L's faces (theta = phi + j pi/2, j in {0, 1}: a table's pose is
 // meaningful modulo pi), the corner k in 0..3 holding L, each uniform, and its size from the
-// model's prior (ModelParams: the paper's one size, or under the rooms model width and depth
-// uniform over the prior's region with L's own leg side), the draw kept when every other leg's
+// model's prior (ModelParams: the paper's one size, or under the rooms model its mixture: the
+// catalog's size at catalog_weight, each side Gaussian at catalog_sigma, else width and depth
+// uniform over the prior's region; L's own leg side), the draw kept when every other leg's
 // centre lies in a cell that is not known free (KnownSpace kFree: a whisker or the body passed
 // there without touching; negative evidence, p_miss = 0.05, taken as certain) and inside the
 // region, and the top overlaps none of the draw's tables (eq. 25, taken as certain). Every
