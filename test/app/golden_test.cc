@@ -97,7 +97,7 @@ TEST_CASE("Golden: --threads 1, 2 and 3 give the same map.json", "[golden]") {
                                     " --model walls"
                                     " --chain-fusion marginal --seed 4");
   INFO("args:" << args);
-  json first;
+  json first, first_moves;
   for (const int threads : {1, 2, 3}) {
     TempDir dir;
     REQUIRE(run(std::string(CRUNCHHOST) + " --sim" + args + " --threads " +
@@ -105,6 +105,19 @@ TEST_CASE("Golden: --threads 1, 2 and 3 give the same map.json", "[golden]") {
     const json got = mapWithoutTime(readJson(dir.file("map.json")));
     const json report = readJson(dir.file("report.json"));
     CHECK(report["global_inference"]["threads"] == threads);
+    // The chains' proposals by move family add up to the run's global proposals, each family's
+    // accepted within its proposals, and the same counts for every thread count.
+    const json& moves = report["global_inference"]["moves"];
+    long long proposals = 0;
+    for (const auto& [name, c] : moves.items()) {
+      CHECK(c["accepted"].get<long long>() <= c["proposals"].get<long long>());
+      proposals += c["proposals"].get<long long>();
+    }
+    CHECK(moves.contains("prime"));
+    CHECK(proposals > 0);
+    CHECK(proposals <= got["stats"]["proposals"].get<long long>());  // plus the per-pose ones
+    if (threads == 1) first_moves = moves;
+    else CHECK(moves == first_moves);
     if (threads == 1) {
       first = got;
       CHECK(got["tables"].size() >= 2);  // a map worth comparing

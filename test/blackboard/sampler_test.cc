@@ -469,6 +469,75 @@ TEST_CASE("Sampler: options validate themselves", "[blackboard]") {
   CHECK_FALSE(o.validate().ok());
 }
 
+TEST_CASE("Sampler: an explained shapelet is primed at prime_explained, an unexplained one every "
+          "sweep, and the move counts add up",
+          "[blackboard]") {
+  ModelParams p;
+  const Pose2 table{1.0, 1.0, 0.3};
+  const std::vector<Shapelet> on_table = TableShapelets(table, p, {0, 1, 2, 3});
+  // Two contacts far from the table and from each other, no leg at either (and a leg born at
+  // one cannot explain the other).
+  const std::vector<Shapelet> lone = {MakeShapelet({3.0, 3.0, 0.0}, p.leg_side, 0),
+                                      MakeShapelet({3.0, 0.5, 0.0}, p.leg_side, 1)};
+  auto board = [&](Blackboard& bb) {
+    for (const Shapelet& s : on_table) bb.pushShapelet(s);
+    for (const Shapelet& s : lone) bb.pushShapelet(s);
+    const int32_t id = bb.addTable(table);
+    for (int c = 0; c < 4; ++c) bb.addLeg(LegOf(table, p, c), id);
+  };
+  const int n = static_cast<int>(on_table.size() + lone.size());
+  {
+    Blackboard bb(p, n, 256);
+    board(bb);
+    for (int slot = 0; slot < n; ++slot) {
+      const bool on_leg = slot < static_cast<int>(on_table.size());
+      CHECK((bb.shapeletExplanation(slot) >= std::log(2.0)) == on_leg);
+      if (!on_leg) CHECK(bb.shapeletExplanation(slot) == 0.0);  // only the background: log 1
+    }
+  }
+  const double cold = std::exp(7.5);
+  for (double share : {0.0, 1.0}) {  // one sweep: exactly the unexplained, or every shapelet
+    Blackboard bb(p, n, 256);
+    board(bb);
+    Rng rng(3);
+    SamplerOptions opt;
+    opt.prime_explained = share;
+    Sampler sampler(bb, opt, rng);
+    sampler.sweep(cold);
+    const MoveCounts& m = sampler.stats().by_move;
+    CHECK(m[static_cast<size_t>(MoveKind::kPrime)].proposals ==
+          (share == 0.0 ? static_cast<long long>(lone.size()) : n));
+    long long total = 0, taken = 0;
+    for (const MoveCount& c : m) {
+      total += c.proposals;
+      taken += c.accepted;
+      CHECK(c.accepted <= c.proposals);
+    }
+    CHECK(total == sampler.stats().proposals);
+    CHECK(taken == sampler.stats().accepted);
+  }
+  // Over many cold sweeps of the explained table alone, each shapelet is primed in a share of
+  // them (binomial: within 5 sd), and the table stays: its shapelets stay explained.
+  Blackboard bb(p, static_cast<int>(on_table.size()), 256);
+  for (const Shapelet& s : on_table) bb.pushShapelet(s);
+  const int32_t id = bb.addTable(table);
+  for (int c = 0; c < 4; ++c) bb.addLeg(LegOf(table, p, c), id);
+  Rng rng(5);
+  SamplerOptions opt;
+  opt.prime_explained = 0.3;
+  Sampler sampler(bb, opt, rng);
+  constexpr int kSweeps = 400;
+  for (int i = 0; i < kSweeps; ++i) sampler.sweep(cold);
+  const double trials = static_cast<double>(kSweeps * on_table.size());
+  const double primes =
+      static_cast<double>(sampler.stats().by_move[static_cast<size_t>(MoveKind::kPrime)].proposals);
+  CHECK(std::abs(primes - 0.3 * trials) < 5.0 * std::sqrt(trials * 0.3 * 0.7));
+  for (int slot = 0; slot < static_cast<int>(on_table.size()); ++slot)
+    CHECK(bb.shapeletExplanation(slot) >= std::log(2.0));
+  opt.prime_explained = 1.5;
+  CHECK_FALSE(opt.validate().ok());
+}
+
 // ---------------------------------------------------------------- the rooms model (issue 13)
 
 namespace {

@@ -74,7 +74,9 @@ TEST_CASE("GlobalChain: the result depends on its stream only, not on chains bes
   });
   for (size_t c = 0; c < streams.size(); ++c) {
     INFO("chain " << c);
-    CHECK(alone[c].proposals > 1000);
+    // Not a trivial chain (about 800 proposals since the chains prime an explained shapelet in
+    // one sweep of ten, MappingOptions::global_prime_explained; 2,500 before).
+    CHECK(alone[c].proposals > 500);
     CHECK(sameResult(alone[c], together[c]));
   }
   // Not vacuous: the chains' own streams make them differ.

@@ -182,6 +182,8 @@ TEST_CASE("Mapper: pose by pose gives exactly runMapping's map", "[mapping][mapp
       const auto [lo, hi] = reach(script.poses, mounts);
       Mapper mapper(mounts, lo, hi, o);
       for (std::size_t t = 0; t < script.poses.size(); ++t) {
+        // As runMapping: the teleported body stands at the pose (its footprint is free space).
+        mapper.addBodySweep(script.poses[t].position(), script.poses[t].position());
         CHECK(mapper.addPose(script.poses[t], script.reports[t], script.rays[t]) == 1);
       }
       CHECK(mapper.poses() == static_cast<int>(script.poses.size()));

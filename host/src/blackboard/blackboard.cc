@@ -781,6 +781,11 @@ void Blackboard::acceptMove() {
   kept_slots_.clear();
 }
 
+double Blackboard::shapeletExplanation(int slot) const {
+  if (!wm_used_[static_cast<size_t>(slot)]) return 0.0;
+  return shapeletTerm(slot) - logs_.c_S;
+}
+
 void Blackboard::setIncremental(bool on) {
   incremental_ = on;
   ++gen_;

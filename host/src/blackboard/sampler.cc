@@ -42,6 +42,7 @@ Status SamplerOptions::validate() const {
       checkRange("resize_sigma", resize_sigma, 0.0, 1.0),
       checkRange("leg_side_sigma", leg_side_sigma, 0.0, 1.0),
       checkRange("side_prior_draws", side_prior_draws, 0.0, 1.0),
+      checkRange("prime_explained", prime_explained, 0.0, 1.0),
       checkRange("wall_birth_rate", wall_birth_rate, 0.0, 1.0),
       checkRange("wall_grow_gap", wall_grow_gap, 0.0, 10.0),
       checkRange("wall_grow_gap_unseen", wall_grow_gap_unseen, 0.0, 10.0),
@@ -159,9 +160,11 @@ void Sampler::sweep(double beta) {
     sweepReversible(beta);
     return;
   }
+  move_ = MoveKind::kPrime;
   for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
-    if (bb_.slotUsed(slot)) primeLeg(slot, beta);
+    if (bb_.slotUsed(slot) && primed(slot)) primeLeg(slot, beta);
   if (walls()) {
+    move_ = MoveKind::kWallBirth;
     for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot)
       if (bb_.slotUsed(slot)) proposeWallBirth(slot, beta);
   }
@@ -178,6 +181,7 @@ void Sampler::sweep(double beta) {
   const bool sized = bb_.params().sized();
   for (const Ref& h : order_) {
     if (h.is_wall) {
+      move_ = MoveKind::kWall;
       if (bb_.wall(h.id).alive) wallMove(h.id, beta);
       continue;
     }
@@ -185,39 +189,65 @@ void Sampler::sweep(double beta) {
     if (h.is_table) {
       if (!bb_.table(h.id).alive) continue;
       if (r < opt_.r1) {
+        move_ = MoveKind::kTableDeath;
         if (walls() && rng_.uniform() < 0.5) deathTableWithLegs(h.id, beta);
         else deathTable(h.id, beta);
-      } else if (r < opt_.r3 && r >= opt_.r2) proposeChild(h.id, beta);
-      else if (!sized) jitterTable(h.id, beta);  // tables have only the null parent
-      else {
+      } else if (r < opt_.r3 && r >= opt_.r2) {
+        move_ = MoveKind::kChild;
+        proposeChild(h.id, beta);
+      } else if (!sized) {
+        move_ = MoveKind::kTablePose;
+        jitterTable(h.id, beta);  // tables have only the null parent
+      } else {
         // The rooms model shares the pose-move slot among pose, size and leg side.
         const double u = rng_.uniform();
+        move_ = u < 0.4 ? MoveKind::kTablePose : MoveKind::kTableSize;
         if (u < 0.4) jitterTable(h.id, beta);
         else if (u < 0.85) resizeTable(h.id, beta);
         else tableLegSide(h.id, beta);
         // and, where an orphan leg stands on its long side, a split there.
+        move_ = MoveKind::kTableSize;
         if (opt_.split_tables && bb_.table(h.id).alive) splitTable(h.id, beta);
       }
     } else {
       if (!bb_.leg(h.id).alive) continue;
-      if (r < opt_.r1) deathLeg(h.id, beta);
-      else if (r < opt_.r2) parentChange(h.id, beta);
-      else if (r < opt_.r3) {  // a leg's children are observations
+      if (r < opt_.r1) {
+        move_ = MoveKind::kLegDeath;
+        deathLeg(h.id, beta);
+      } else if (r < opt_.r2) {
+        move_ = MoveKind::kParentChange;
+        parentChange(h.id, beta);
+      } else if (r < opt_.r3) {  // a leg's children are observations
+        move_ = MoveKind::kLegPose;
         if (sized && rng_.uniform() < 0.3) legSide(h.id, beta);
         else jitterLeg(h.id, beta);
       } else if (sized) {
+        move_ = MoveKind::kParentBirth;
         // With a catalog, half the time also a birth of its size: the walls model's, its 8
         // placements of the one size weighed by the legs at their corners.
         proposeParentSized(h.id, beta);
         if (bb_.params().catalog_weight > 0.0 && bb_.leg(h.id).alive && rng_.uniform() < 0.5)
           proposeParent(h.id, beta);
-      } else proposeParent(h.id, beta);
+      } else {
+        move_ = MoveKind::kParentBirth;
+        proposeParent(h.id, beta);
+      }
     }
   }
 }
 
+bool Sampler::primed(int slot) {
+  // A shapelet that a live cause explains at least as well as clutter does (its background's
+  // responsibility <= 1/2) is primed at prime_explained: a leg born there would mostly duplicate
+  // the cause and be refused (docs/BENCHMARKS.md "The move mix"). 1 draws nothing: the paper's.
+  if (opt_.prime_explained >= 1.0) return true;
+  if (bb_.shapeletExplanation(slot) < std::log(2.0)) return true;
+  return rng_.uniform() < opt_.prime_explained;
+}
+
 void Sampler::accepted(bool ok) {
   stats_.accepted += ok;
+  stats_.by_move[static_cast<size_t>(move_)].accepted += ok;
   if (!ok) return;
   bb_.acceptMove();
   if (audit_) stats_.audit_cache_max_error = std::max(stats_.audit_cache_max_error, bb_.cacheError());
@@ -236,6 +266,7 @@ bool Sampler::decide(double delta, double beta) {
     stats_.audit_max_error = std::max(stats_.audit_max_error, err);
   }
   ++stats_.proposals;
+  ++stats_.by_move[static_cast<size_t>(move_)].proposals;
   const double a = opt_.acceptance == Acceptance::kTempered ? temperedAcceptance(delta, beta)
                                                             : literalAcceptance(delta, beta);
   const bool ok = rng_.uniform() < a;
@@ -932,6 +963,7 @@ bool Sampler::decideRj(double delta, double beta, double log_q_ratio) {
     stats_.audit_max_error = std::max(stats_.audit_max_error, err);
   }
   ++stats_.proposals;
+  ++stats_.by_move[static_cast<size_t>(move_)].proposals;
   const double log_a = beta * delta + log_q_ratio;
   const bool ok = log_a >= 0.0 || std::log(rng_.uniform()) < log_a;
   accepted(ok);
@@ -1023,6 +1055,7 @@ int32_t Sampler::randomLiveTable() {
 }
 
 void Sampler::sweepReversible(double beta) {
+  move_ = MoveKind::kReversible;
   rj_slots_.clear();
   for (int slot = 0; slot < bb_.workingMemoryCapacity(); ++slot) {
     Box b;

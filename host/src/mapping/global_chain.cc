@@ -50,6 +50,7 @@ std::vector<Rng> globalChainStreams(uint64_t seed, int n) {
 SamplerOptions globalSamplerOptions(const MappingOptions& options) {
   SamplerOptions so = options.sampler;
   so.sweeps_per_temperature = options.global_sweeps;
+  so.prime_explained = options.global_prime_explained;
   // Pictures of a pose's annealing part-way: not of the global chains, which may run at once.
   so.after_temperature = nullptr;
   so.after_sweep = nullptr;
@@ -82,6 +83,7 @@ ChainResult GlobalChain::result() {
   r.samples = samples_;
   r.sample_count = sample_count_;
   r.proposals = sampler_.stats().proposals;
+  r.moves = sampler_.stats().by_move;
   r.live_tables = board_.liveTables();
   r.live_legs = board_.liveLegs();
   return r;

@@ -51,6 +51,7 @@ std::vector<ChainResult> runChains(Map& map, const MappingOptions& options,
   });
   for (const ChainResult& r : results) {
     map.stats.proposals += r.proposals;
+    addMoveCounts(map.stats.global_moves, r.moves);
     map.stats.peak_live_tables = std::max(map.stats.peak_live_tables, r.live_tables);
     map.stats.peak_live_legs = std::max(map.stats.peak_live_legs, r.live_legs);
   }
@@ -174,6 +175,7 @@ std::vector<MapTable> globalMap(Map& map, const MappingOptions& options,
     Sampler sampler(board, so, streams.back());
     sampler.anneal();
     map.stats.proposals += sampler.stats().proposals;
+    addMoveCounts(map.stats.global_moves, sampler.stats().by_move);
     sampler.mapTables(poses);
     if (options.model.walled()) {
       identifiedTablesOf(board, options.fuse.size, kept);

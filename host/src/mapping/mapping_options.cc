@@ -20,6 +20,7 @@ Status MappingOptions::validate() const {
                            checkCount("working_memory", working_memory, 1, 1000),
                            checkCount("global_sweeps", global_sweeps, 0, 1000),
                            checkCount("global_chains", global_chains, 1, 256),
+                           checkRange("global_prime_explained", global_prime_explained, 0.0, 1.0),
                            checkCount("threads", threads, 0, 256),
                            checkCount("pool_steps", pool_steps, 1,
                                       std::max(1, sampler.schedule_steps)),

@@ -61,7 +61,14 @@ nlohmann::ordered_json mapCountsJson(const Map& map) {
 }
 
 nlohmann::ordered_json globalInferenceJson(const MapStats& stats) {
-  return {{"wall_s", stats.global_s}, {"threads", stats.global_threads}};
+  nlohmann::ordered_json moves = nlohmann::ordered_json::object();
+  for (size_t k = 0; k < kMoveKinds; ++k) {
+    const MoveCount& c = stats.global_moves[k];
+    if (c.proposals == 0) continue;
+    moves[moveKindName(static_cast<MoveKind>(k))] = {{"proposals", c.proposals},
+                                                     {"accepted", c.accepted}};
+  }
+  return {{"wall_s", stats.global_s}, {"threads", stats.global_threads}, {"moves", moves}};
 }
 
 nlohmann::ordered_json modelJson(const ModelParams& model) {
@@ -81,6 +88,7 @@ nlohmann::ordered_json samplerJson(const MappingOptions& options) {
           {"working_memory", options.working_memory},
           {"global_sweeps", options.global_sweeps},
           {"global_chains", options.global_chains},
+          {"global_prime_explained", options.global_prime_explained},
           {"smart_proposals", s.smart_parent},
           {"acceptance", acceptanceName(s.acceptance)},
           {"chain_fusion", chainFusionName(options.chain_fusion)},

@@ -258,6 +258,13 @@ class Blackboard {
   void setIncremental(bool on);
   // The largest |cached - fresh| over every cached term (tests: the audit).
   double cacheError() const;
+  // How well the live hypotheses explain working-memory slot `slot` against its background:
+  // eq. 17's log(c_S + sum of its causes' kernels) - log(c_S), >= 0, 0 when no leg or wall
+  // explains it; log 2 is where a cause is as probable as clutter (Sampler::sweep's priming,
+  // SamplerOptions::prime_explained). Afresh, not from the cache, whose terms may differ from a
+  // fresh one in the last bit (the legs summed in another order), so that the choice depends
+  // on the state alone.
+  double shapeletExplanation(int slot) const;
 
   // Removes every hypothesis and shapelet.
   void clear();

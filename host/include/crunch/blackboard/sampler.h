@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "crunch/blackboard/blackboard.h"
+#include "crunch/blackboard/moves.h"
 #include "crunch/core/result.h"
 #include "crunch/core/rng.h"
 
@@ -83,6 +84,13 @@ struct SamplerOptions {
   // Q(pa(S)): a leg behind the touched surface, anywhere along a face, with this jitter.
   double prime_sigma_r = 0.003;
   double prime_sigma_theta = kPi / 64;
+  // The chance a sweep primes a shapelet that the live hypotheses already explain at least as
+  // well as clutter does (Blackboard::shapeletExplanation >= log 2); the others are primed at
+  // every sweep. 1: every shapelet every sweep, Algorithm 1 as the paper has it (the per-pose
+  // default). The global inference sets MappingOptions::global_prime_explained: there priming
+  // is 80 % of the proposals, and an explained shapelet's is taken 1 time in 700-1000
+  // (docs/BENCHMARKS.md "The move mix").
+  double prime_explained = 1.0;
   // Pose moves.
   double jitter_sigma_r = 0.01;
   double jitter_sigma_theta = kPi / 90;
@@ -183,6 +191,8 @@ struct SamplerOptions {
 struct SamplerStats {
   long long proposals = 0;
   long long accepted = 0;
+  // proposals and accepted split by the family of the move that made them.
+  MoveCounts by_move{};
   // With setAudit(true): the largest |local change - brute-force change| of the log joint seen
   // over all moves. Tests use it to prove each move's Markov blanket is complete.
   double audit_max_error = 0.0;
@@ -358,6 +368,8 @@ class Sampler {
     }
   }
   void primeLeg(int slot, double beta);
+  // Whether this sweep primes working-memory slot `slot` (SamplerOptions::prime_explained).
+  bool primed(int slot);
   // primeLeg's leg for an oriented shapelet (on its face) and for a point contact.
   // `side` is the leg's side: the paper's one, or the rooms model's draw.
   Pose2 legOnFace(const Shapelet& s, double side);
@@ -488,6 +500,7 @@ class Sampler {
   SamplerOptions opt_;
   Rng& rng_;
   SamplerStats stats_;
+  MoveKind move_ = MoveKind::kPrime;  // the family of the move being made, for stats_.by_move
   std::vector<double> betas_;
   std::vector<Ref> order_;
   std::vector<int> rj_slots_;  // working-memory slots with a birth box (sweepReversible)

@@ -47,6 +47,7 @@ struct ChainResult {
   std::vector<ObjectSample> samples;
   int sample_count = 0;
   long long proposals = 0;
+  MoveCounts moves{};  // proposals and acceptances by move family
   int live_tables = 0;  // Blackboard::liveTables() at the end of the annealing
   int live_legs = 0;
 };

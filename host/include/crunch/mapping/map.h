@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "crunch/blackboard/moves.h"
 #include "crunch/core/geometry.h"
 #include "crunch/core/result.h"
 #include "crunch/robot/shapelet.h"
@@ -52,6 +53,9 @@ struct MapStats {
   // chains ran on (0: none ran). Measured, machine-dependent: in report.json, not in map.json.
   double global_s = 0.0;
   int global_threads = 0;
+  // The global inference's proposals and acceptances by move family, summed over its chains
+  // and the pool's sampler (report.json's global_inference.moves).
+  MoveCounts global_moves{};
 };
 
 // A leg of a posterior draw that no table of the draw holds (eq. 13's null parent).

@@ -61,6 +61,11 @@ struct MappingOptions {
   // temperature (global inference); 0: clustering of the per-pose MAPs (fused_map.h).
   int global_sweeps = 8;
   int global_chains = 8;  // independent chains
+  // The global chains' SamplerOptions::prime_explained: a shapelet already explained is primed
+  // in one sweep of ten. Over the run's every shapelet priming is 80 % of the proposals and an
+  // explained shapelet's prime is taken about once in 700-1000; at 0.1 the chains make ~70 %
+  // fewer proposals at the same F1 (docs/BENCHMARKS.md "The move mix"). 1: the paper's sweep.
+  double global_prime_explained = 0.1;
   // Threads the global inference's chains run on (`--threads`; 0: one per core,
   // core/parallel.h hardwareThreads()). Never changes a result: each chain draws from its own
   // stream and the chains are combined in chain order (global_chain.h). A property of the
@@ -97,6 +102,7 @@ struct MappingOptions {
   // Every setting of the run: model.validate(), sampler.validate(), fuse.validate() (their
   // errors prefixed "model: ", "sampler: ", "fuse: "), working_memory 1..1000 (the blackboard
   // holds this many shapelets per annealing), global_sweeps 0..1000, global_chains 1..256,
+  // global_prime_explained 0..1,
   // threads 0..256, pool_steps and marginal_steps 1..sampler.schedule_steps, marginal_keep in
   // [0, 1). Every acceptance runs with every object model (the reversible jump's walls and
   // sizes: Sampler::sweepReversible).
