@@ -3,8 +3,10 @@
 #include <ode/ode.h>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <mutex>
 
@@ -82,6 +84,15 @@ Vec2 boundaryOutward(const WallSpec& w, const Scene& scene) {
   return {0.0, 0.0};
 }
 
+// The grid cell holding coordinate v on an axis starting at `origin` with `cells` cells, clamped
+// to the grid (a query reaching past the boxes' extent meets its border cells only).
+constexpr double kGridCell = 0.5;  // metres: a whisker's ray spans one or two cells
+
+int gridCell(double v, double origin, int cells) {
+  const double c = std::floor((v - origin) / kGridCell);
+  return static_cast<int>(std::clamp(c, 0.0, static_cast<double>(cells - 1)));
+}
+
 }  // namespace
 
 World::World() : space_(dSimpleSpaceCreate(nullptr)) {
@@ -128,7 +139,77 @@ std::unique_ptr<World> World::build(const Scene& scene) {
   for (const TableSpec& t : scene.tables) {
     for (const OrientedRect& leg : t.legs()) world->addBox(leg, kLegHeight);
   }
+  world->buildGrid();
   return world;
+}
+
+void World::buildGrid() {
+  const size_t n = footprints_.size();
+  geom_lo_.resize(n);
+  geom_hi_.resize(n);
+  Vec2 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  Vec2 hi = -lo;
+  for (size_t i = 0; i < n; ++i) {
+    const OrientedRect& r = footprints_[i];
+    // The footprint's axis-aligned bounding box: half-extents |c| hx + |s| hy and |s| hx + |c| hy.
+    const double c = std::abs(std::cos(r.pose.theta)), s = std::abs(std::sin(r.pose.theta));
+    const Vec2 half{c * 0.5 * r.size_x + s * 0.5 * r.size_y,
+                    s * 0.5 * r.size_x + c * 0.5 * r.size_y};
+    geom_lo_[i] = r.pose.position() - half;
+    geom_hi_[i] = r.pose.position() + half;
+    lo = lo.cwiseMin(geom_lo_[i]);
+    hi = hi.cwiseMax(geom_hi_[i]);
+  }
+  if (n == 0) return;
+  grid_lo_ = lo;
+  grid_nx_ = std::max(1, static_cast<int>(std::ceil((hi.x() - lo.x()) / kGridCell)));
+  grid_ny_ = std::max(1, static_cast<int>(std::ceil((hi.y() - lo.y()) / kGridCell)));
+  geom_cells_.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    geom_cells_[i] = {
+        gridCell(geom_lo_[i].x(), lo.x(), grid_nx_), gridCell(geom_lo_[i].y(), lo.y(), grid_ny_),
+        gridCell(geom_hi_[i].x(), lo.x(), grid_nx_), gridCell(geom_hi_[i].y(), lo.y(), grid_ny_)};
+  const size_t cells = static_cast<size_t>(grid_nx_) * static_cast<size_t>(grid_ny_);
+  cell_start_.assign(cells + 1, 0);
+  for (const CellRange& g : geom_cells_)
+    for (int y = g.y0; y <= g.y1; ++y)
+      for (int x = g.x0; x <= g.x1; ++x) ++cell_start_[static_cast<size_t>(y * grid_nx_ + x) + 1];
+  for (size_t c = 0; c < cells; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_items_.resize(static_cast<size_t>(cell_start_[cells]));
+  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (size_t i = 0; i < n; ++i) {
+    const CellRange& g = geom_cells_[i];
+    for (int y = g.y0; y <= g.y1; ++y)
+      for (int x = g.x0; x <= g.x1; ++x)
+        cell_items_[static_cast<size_t>(fill[static_cast<size_t>(y * grid_nx_ + x)]++)] =
+            static_cast<int>(i);
+  }
+}
+
+bool World::candidates(const Vec2& lo, const Vec2& hi, std::span<int> out, int& n) const {
+  n = 0;
+  if (geom_cells_.empty()) return true;
+  const int qx0 = gridCell(lo.x(), grid_lo_.x(), grid_nx_),
+            qy0 = gridCell(lo.y(), grid_lo_.y(), grid_ny_);
+  const int qx1 = gridCell(hi.x(), grid_lo_.x(), grid_nx_),
+            qy1 = gridCell(hi.y(), grid_lo_.y(), grid_ny_);
+  for (int y = qy0; y <= qy1; ++y) {
+    for (int x = qx0; x <= qx1; ++x) {
+      const size_t c = static_cast<size_t>(y * grid_nx_ + x);
+      for (int k = cell_start_[c]; k < cell_start_[c + 1]; ++k) {
+        const int g = cell_items_[static_cast<size_t>(k)];
+        const CellRange& r = geom_cells_[static_cast<size_t>(g)];
+        if (x != std::max(r.x0, qx0) || y != std::max(r.y0, qy0)) continue;  // seen in another cell
+        const Vec2& glo = geom_lo_[static_cast<size_t>(g)];
+        const Vec2& ghi = geom_hi_[static_cast<size_t>(g)];
+        if (glo.x() > hi.x() || glo.y() > hi.y() || ghi.x() < lo.x() || ghi.y() < lo.y()) continue;
+        if (n == static_cast<int>(out.size())) return false;
+        out[static_cast<size_t>(n++)] = g;
+      }
+    }
+  }
+  std::sort(out.begin(), out.begin() + n, std::greater<int>());  // the newest geom first
+  return true;
 }
 
 std::optional<RayHit> World::castRay(Vec2 origin, double heading, double length, double z) const {
@@ -141,7 +222,18 @@ std::optional<RayHit> World::castRay(Vec2 origin, double heading, double length,
   dGeomRaySetLength(ray_.get(), length);
 
   RayQuery q;
-  dSpaceCollide2(ray_.get(), reinterpret_cast<dGeomID>(space_.get()), &q, &rayCallback);
+  // The geoms near the ray (a margin for the footprints' rounding), each tested exactly by
+  // dCollide as the space would (rayCallback with the ray first); the whole space if too many.
+  const Vec2 end = origin + length * dir;
+  const Vec2 margin{1e-6, 1e-6};
+  std::array<int, 64> near;
+  int n_near = 0;
+  if (candidates(origin.cwiseMin(end) - margin, origin.cwiseMax(end) + margin, near, n_near)) {
+    for (int i = 0; i < n_near; ++i)
+      rayCallback(&q, ray_.get(), geoms_[static_cast<size_t>(near[static_cast<size_t>(i)])].get());
+  } else {
+    dSpaceCollide2(ray_.get(), reinterpret_cast<dGeomID>(space_.get()), &q, &rayCallback);
+  }
   if (!std::isfinite(q.best)) return std::nullopt;
 
   RayHit hit;
@@ -162,7 +254,16 @@ bool World::bodyCollides(const Pose2& pose) const {
   }
   dGeomSetPosition(body_.get(), pose.x, pose.y, kProbeZ);
   bool hit = false;
-  dSpaceCollide2(body_.get(), reinterpret_cast<dGeomID>(space_.get()), &hit, &overlapCallback);
+  const Vec2 r{kRobotRadius + 1e-6, kRobotRadius + 1e-6};
+  std::array<int, 64> near;
+  int n = 0;
+  if (candidates(pose.position() - r, pose.position() + r, near, n)) {
+    for (int i = 0; i < n && !hit; ++i)
+      overlapCallback(&hit, body_.get(),
+                      geoms_[static_cast<size_t>(near[static_cast<size_t>(i)])].get());
+  } else {
+    dSpaceCollide2(body_.get(), reinterpret_cast<dGeomID>(space_.get()), &hit, &overlapCallback);
+  }
   return hit;
 }
 

@@ -440,7 +440,16 @@ double Blackboard::wallTerms(int32_t id, const Touched& t) const {
   (void)t;
   const WallHyp& w = walls_[id];
   if (!w.alive) return 0.0;
-  double e = wall_odds_ - p_.wall_cost_per_m * w.length() + wallFreeTerm(w.a, w.b);
+  return wallPairTerms(id, wallOwnTerm(w));
+}
+
+double Blackboard::wallOwnTerm(const WallHyp& w) const {
+  return wall_odds_ - p_.wall_cost_per_m * w.length() + wallFreeTerm(w.a, w.b);
+}
+
+double Blackboard::wallPairTerms(int32_t id, double own) const {
+  const WallHyp& w = walls_[id];
+  double e = own;
   // Tables and legs intruding into its solid, counted here for every one; tableTerms() and
   // legTerms() skip the walls a move touches.
   const double band = p_.wall_solid_depth;
@@ -695,6 +704,10 @@ double Blackboard::cachedLegOwn(int32_t id) {
   return cachedOwn(legs_[id], gen_, [&](const LegHyp& l) { return legOwnTerm(l); });
 }
 
+double Blackboard::cachedWallOwn(int32_t id) {
+  return cachedOwn(walls_[id], gen_, [&](const WallHyp& w) { return wallOwnTerm(w); });
+}
+
 double Blackboard::cachedShapeletTerm(int slot) {
   const auto i = static_cast<size_t>(slot);
   if (slot_gen_[i] != gen_) {
@@ -722,7 +735,8 @@ double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more)
     if (legs_[id].alive) e += legPairTerms(id, t, cachedLegOwn(id));
   for (int32_t slot : t.shapelets.span())
     if (wm_used_[static_cast<size_t>(slot)]) e += cachedShapeletTerm(slot);
-  for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  for (int32_t id : t.walls.span())
+    if (walls_[id].alive) e += wallPairTerms(id, cachedWallOwn(id));
   e += touchedWallEndTerms(t);
   for (int32_t slot : more)
     if (wm_used_[static_cast<size_t>(slot)]) e += cachedShapeletTerm(slot);
@@ -730,7 +744,7 @@ double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more)
 }
 
 double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) {
-  n_kept_tables_ = n_kept_legs_ = 0;
+  n_kept_tables_ = n_kept_legs_ = n_kept_walls_ = 0;
   kept_slots_.clear();
   if (t.shapelets.overflowed || t.wall_ends.overflowed)
     return -std::numeric_limits<double>::infinity();
@@ -756,7 +770,12 @@ double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) 
     return term;
   };
   for (int32_t slot : t.shapelets.span()) e += keep(slot);
-  for (int32_t id : t.walls.span()) e += wallTerms(id, t);
+  for (int32_t id : t.walls.span()) {
+    if (!walls_[id].alive) continue;
+    const double own = wallOwnTerm(walls_[id]);
+    kept_walls_[static_cast<size_t>(n_kept_walls_++)] = {id, own};
+    e += wallPairTerms(id, own);
+  }
   e += touchedWallEndTerms(t);
   for (int32_t slot : more) e += keep(slot);
   return e;
@@ -773,17 +792,22 @@ void Blackboard::acceptMove() {
     l.own = kept_legs_[static_cast<size_t>(i)].value;
     l.own_gen = gen_;
   }
+  for (int i = 0; i < n_kept_walls_; ++i) {
+    WallHyp& w = walls_[kept_walls_[static_cast<size_t>(i)].id];
+    w.own = kept_walls_[static_cast<size_t>(i)].value;
+    w.own_gen = gen_;
+  }
   for (const Kept& k : kept_slots_) {
     slot_term_[static_cast<size_t>(k.id)] = k.value;
     slot_gen_[static_cast<size_t>(k.id)] = gen_;
   }
-  n_kept_tables_ = n_kept_legs_ = 0;
+  n_kept_tables_ = n_kept_legs_ = n_kept_walls_ = 0;
   kept_slots_.clear();
 }
 
-double Blackboard::shapeletExplanation(int slot) const {
+double Blackboard::shapeletExplanation(int slot) {
   if (!wm_used_[static_cast<size_t>(slot)]) return 0.0;
-  return shapeletTerm(slot) - logs_.c_S;
+  return (incremental_ ? cachedShapeletTerm(slot) : shapeletTerm(slot)) - logs_.c_S;
 }
 
 void Blackboard::setIncremental(bool on) {
@@ -806,6 +830,10 @@ double Blackboard::cacheError() const {
   for (int32_t id = 0; id < legs_.extent(); ++id) {
     const LegHyp& l = legs_[id];
     if (l.alive && l.own_gen == gen_) err = std::max(err, termError(l.own, legOwnTerm(l)));
+  }
+  for (int32_t id = 0; id < walls_.extent(); ++id) {
+    const WallHyp& w = walls_[id];
+    if (w.alive && w.own_gen == gen_) err = std::max(err, termError(w.own, wallOwnTerm(w)));
   }
   for (size_t i = 0; i < wm_.size(); ++i)
     if (wm_used_[i] && slot_gen_[i] == gen_)

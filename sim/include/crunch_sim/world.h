@@ -20,6 +20,7 @@
 
 #include <memory>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "crunch/core/geometry.h"
@@ -104,6 +105,12 @@ class World {
  private:
   World();
   void addBox(const OrientedRect& footprint, double height);
+  // Fills the broad phase below from footprints_ (World::build, once every box is added).
+  void buildGrid();
+  // The geoms whose footprint's bounding box meets the box [lo, hi], in ODE's simple-space order
+  // (the newest first, as dSpaceCollide2 visits them), into `out`; false when more than
+  // out.size() do (the caller then asks the whole space).
+  bool candidates(const Vec2& lo, const Vec2& hi, std::span<int> out, int& n) const;
 
   using SpacePtr = std::unique_ptr<dxSpace, detail::SpaceDeleter>;
   using GeomPtr = std::unique_ptr<dxGeom, detail::GeomDeleter>;
@@ -114,8 +121,23 @@ class World {
   SpacePtr space_;              // does not destroy its geoms; geoms_ owns them
   std::vector<GeomPtr> geoms_;  // the walls and legs, inside space_
   std::vector<OrientedRect> footprints_;
-  GeomPtr ray_;   // scratch ray for castRay, in no space
-  GeomPtr body_;  // scratch capsule for bodyCollides, in no space
+  // The broad phase of castRay and bodyCollides (ODE's simple space, like its hash and SAP
+  // spaces, tests a lone geom against every geom of the space: on a large floor's hundreds of
+  // legs that was a third of a run). A uniform grid of 0.5 m cells (world.cc) over the boxes'
+  // bounding boxes: cell_start_[c] .. cell_start_[c + 1] index cell_items_, the geoms whose
+  // bounding box meets cell c (CSR, filled once). A geom spanning several cells is reported from
+  // the first cell that it and the query share only.
+  struct CellRange {
+    int x0, y0, x1, y1;
+  };
+  Vec2 grid_lo_{0.0, 0.0};
+  int grid_nx_ = 0, grid_ny_ = 0;
+  std::vector<int> cell_start_;
+  std::vector<int> cell_items_;
+  std::vector<CellRange> geom_cells_;    // per geom, the cells its bounding box meets
+  std::vector<Vec2> geom_lo_, geom_hi_;  // per geom, its footprint's bounding box
+  GeomPtr ray_;                          // scratch ray for castRay, in no space
+  GeomPtr body_;                         // scratch capsule for bodyCollides, in no space
 };
 
 }  // namespace crunch::sim

@@ -261,10 +261,10 @@ class Blackboard {
   // How well the live hypotheses explain working-memory slot `slot` against its background:
   // eq. 17's log(c_S + sum of its causes' kernels) - log(c_S), >= 0, 0 when no leg or wall
   // explains it; log 2 is where a cause is as probable as clutter (Sampler::sweep's priming,
-  // SamplerOptions::prime_explained). Afresh, not from the cache, whose terms may differ from a
-  // fresh one in the last bit (the legs summed in another order), so that the choice depends
-  // on the state alone.
-  double shapeletExplanation(int slot) const;
+  // SamplerOptions::prime_explained). From the cache where it holds the slot's term (computing
+  // and caching it where not; afresh without incremental energies): a cached term is the fresh
+  // one of the state it was kept in, summed in that state's order.
+  double shapeletExplanation(int slot);
 
   // Removes every hypothesis and shapelet.
   void clear();
@@ -288,6 +288,7 @@ class Blackboard {
   double cachedTableOwn(int32_t id);
   double cachedLegOwn(int32_t id);
   double cachedShapeletTerm(int slot);
+  double cachedWallOwn(int32_t id);
   void mutated() {
     if (!in_sweep_) ++gen_;
   }
@@ -298,6 +299,10 @@ class Blackboard {
   double tableSizeTerm(const TableHyp& t) const;
   double legSideTerm(const LegHyp& l) const;
   double wallTerms(int32_t id, const Touched& t) const;
+  // A live wall's own terms (odds, length cost, negative evidence along it), and `own` plus the
+  // tables and legs intruding into its solid.
+  double wallOwnTerm(const WallHyp& w) const;
+  double wallPairTerms(int32_t id, double own) const;
   // A live wall's end terms: logFreeWallEnd() for each end that meets no other wall.
   double wallEndTerms(int32_t id) const;
   // wallEndTerms over t.walls and t.wall_ends, each wall once.
@@ -366,7 +371,8 @@ class Blackboard {
   };
   std::array<Kept, 8> kept_tables_;
   std::array<Kept, 4 * kMaxChildren> kept_legs_;
-  int n_kept_tables_ = 0, n_kept_legs_ = 0;
+  std::array<Kept, 4> kept_walls_;  // Touched::walls' capacity
+  int n_kept_tables_ = 0, n_kept_legs_ = 0, n_kept_walls_ = 0;
   long long blanket_overflows_ = 0;
   std::vector<Kept> kept_slots_;
 };

@@ -73,6 +73,11 @@ struct LegHyp {
 struct WallHyp {
   Vec2 a{0.0, 0.0}, b{0.0, 0.0};
   bool alive = false;
+  // The Blackboard's cache of this record's own terms of J (its odds, length cost and negative
+  // evidence; incremental energies, blackboard.h): valid while own_gen equals the board's
+  // generation.
+  double own = 0.0;
+  uint64_t own_gen = 0;
 
   double length() const { return (b - a).norm(); }
   double angle() const { return std::atan2(b.y() - a.y(), b.x() - a.x()); }
