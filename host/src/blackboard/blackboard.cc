@@ -572,7 +572,11 @@ double Blackboard::tableTerms(int32_t id, const Touched& t) const {
 }
 
 double Blackboard::tableOwnTerm(const TableHyp& tab) const {
-  double e = table_odds_ + tab.missingLegs() * log_eps_a_ + tableFreeTerm(tab);
+  return tableOwnTerm(tab, tableFreeTerm(tab));
+}
+
+double Blackboard::tableOwnTerm(const TableHyp& tab, double free) const {
+  double e = table_odds_ + tab.missingLegs() * log_eps_a_ + free;
   if (p_.sized()) e += tableSizeTerm(tab);
   return e;
 }
@@ -603,14 +607,16 @@ double Blackboard::legTerms(int32_t id, const Touched& t) const {
   return legPairTerms(id, t, legOwnTerm(l));
 }
 
-double Blackboard::legOwnTerm(const LegHyp& l) const {
+double Blackboard::legOwnTerm(const LegHyp& l) const { return legOwnTerm(l, freeTerm(l.pose, l.side)); }
+
+double Blackboard::legOwnTerm(const LegHyp& l, double free) const {
   const bool has_parent = l.parent != kNone;
   const double odds =
       has_parent ? logPresenceOdds(logLegDensity(deltaTLHeld(tables_[l.parent], l, p_, nullptr),
                                                  true, logs_),
                                    logs_)
                  : orphan_leg_odds_;
-  double e = odds + freeTerm(l.pose, l.side);
+  double e = odds + free;
   if (p_.sized()) e += legSideTerm(l);
   return e;
 }
@@ -697,11 +703,50 @@ double cachedOwn(Record& r, uint64_t gen, Fresh&& fresh) {
 }  // namespace
 
 double Blackboard::cachedTableOwn(int32_t id) {
-  return cachedOwn(tables_[id], gen_, [&](const TableHyp& t) { return tableOwnTerm(t); });
+  TableHyp& tab = tables_[id];
+  if (tab.own_gen != gen_) {
+    tab.own = tableOwnTerm(tab, cachedTableFree(tab));
+    tab.own_gen = gen_;
+  }
+  return tab.own;
 }
 
 double Blackboard::cachedLegOwn(int32_t id) {
-  return cachedOwn(legs_[id], gen_, [&](const LegHyp& l) { return legOwnTerm(l); });
+  LegHyp& l = legs_[id];
+  if (l.own_gen != gen_) {
+    l.own = legOwnTerm(l, cachedLegFree(l));
+    l.own_gen = gen_;
+  }
+  return l.own;
+}
+
+// A record's free term is a function of its pose and sizes and of the grid (the generation
+// changes with every ray): kept with them, it holds whatever moves came between.
+double Blackboard::cachedTableFree(TableHyp& tab) {
+  const Pose2& q = tab.pose;
+  if (tab.free_gen != gen_ || q.x != tab.free_pose.x || q.y != tab.free_pose.y ||
+      q.theta != tab.free_pose.theta || tab.width != tab.free_width ||
+      tab.depth != tab.free_depth || tab.leg != tab.free_leg) {
+    tab.free = tableFreeTerm(tab);
+    tab.free_gen = gen_;
+    tab.free_pose = q;
+    tab.free_width = tab.width;
+    tab.free_depth = tab.depth;
+    tab.free_leg = tab.leg;
+  }
+  return tab.free;
+}
+
+double Blackboard::cachedLegFree(LegHyp& l) {
+  const Pose2& q = l.pose;
+  if (l.free_gen != gen_ || q.x != l.free_pose.x || q.y != l.free_pose.y ||
+      q.theta != l.free_pose.theta || l.side != l.free_side) {
+    l.free = freeTerm(l.pose, l.side);
+    l.free_gen = gen_;
+    l.free_pose = q;
+    l.free_side = l.side;
+  }
+  return l.free;
 }
 
 double Blackboard::cachedWallOwn(int32_t id) {
@@ -752,13 +797,13 @@ double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) 
   double e = 0.0;
   for (int32_t id : t.tables.span()) {
     if (!tables_[id].alive) continue;
-    const double own = tableOwnTerm(tables_[id]);
+    const double own = tableOwnTerm(tables_[id], cachedTableFree(tables_[id]));
     kept_tables_[static_cast<size_t>(n_kept_tables_++)] = {id, own};
     e += tablePairTerms(id, t, own);
   }
   for (int32_t id : t.legs.span()) {
     if (!legs_[id].alive) continue;
-    const double own = legOwnTerm(legs_[id]);
+    const double own = legOwnTerm(legs_[id], cachedLegFree(legs_[id]));
     kept_legs_[static_cast<size_t>(n_kept_legs_++)] = {id, own};
     e += legPairTerms(id, t, own);
   }
@@ -826,10 +871,19 @@ double Blackboard::cacheError() const {
   for (int32_t id = 0; id < tables_.extent(); ++id) {
     const TableHyp& tab = tables_[id];
     if (tab.alive && tab.own_gen == gen_) err = std::max(err, termError(tab.own, tableOwnTerm(tab)));
+    const bool free_kept = tab.free_gen == gen_ && tab.free_pose.x == tab.pose.x &&
+                           tab.free_pose.y == tab.pose.y && tab.free_pose.theta == tab.pose.theta &&
+                           tab.free_width == tab.width && tab.free_depth == tab.depth &&
+                           tab.free_leg == tab.leg;
+    if (tab.alive && free_kept) err = std::max(err, termError(tab.free, tableFreeTerm(tab)));
   }
   for (int32_t id = 0; id < legs_.extent(); ++id) {
     const LegHyp& l = legs_[id];
     if (l.alive && l.own_gen == gen_) err = std::max(err, termError(l.own, legOwnTerm(l)));
+    const bool free_kept = l.free_gen == gen_ && l.free_pose.x == l.pose.x &&
+                           l.free_pose.y == l.pose.y && l.free_pose.theta == l.pose.theta &&
+                           l.free_side == l.side;
+    if (l.alive && free_kept) err = std::max(err, termError(l.free, freeTerm(l.pose, l.side)));
   }
   for (int32_t id = 0; id < walls_.extent(); ++id) {
     const WallHyp& w = walls_[id];

@@ -60,11 +60,14 @@ uint16_t& FreeSpaceGrid::slot(int plane, int ix, int iy) {
 }
 
 bool FreeSpaceGrid::index(const Vec2& p, int& ix, int& iy) const {
-  const double fx = std::floor((p.x() - lo_.x()) / cell_);
-  const double fy = std::floor((p.y() - lo_.y()) / cell_);
-  if (!(fx >= 0 && fy >= 0 && fx < nx_ && fy < ny_)) return false;
-  ix = static_cast<int>(fx);
-  iy = static_cast<int>(fy);
+  // floor(q) without libm's call (the hot path of every ray and every free-space look-up): for
+  // q >= 0 truncation is floor, and floor(q) >= 0, floor(q) < n hold exactly when q >= 0, q < n
+  // for an integer n; NaN fails both.
+  const double qx = (p.x() - lo_.x()) / cell_;
+  const double qy = (p.y() - lo_.y()) / cell_;
+  if (!(qx >= 0 && qy >= 0 && qx < nx_ && qy < ny_)) return false;
+  ix = static_cast<int>(qx);
+  iy = static_cast<int>(qy);
   return true;
 }
 

@@ -21,7 +21,9 @@
 //
 // Incremental energies (issue 15). Each table's and leg's own terms (its presence odds, missing
 // legs, negative evidence and size prior: everything but its pair terms) and each shapelet's
-// noisy-OR term (eq. 17) are cached. A move asks energyBefore() (the cached terms, the pair terms
+// noisy-OR term (eq. 17) are cached, and so are each wall's own terms; each table's and leg's
+// negative evidence is kept with the pose it was read at, so a move that leaves a hypothesis in
+// place (a new parent, a sibling moved) reads no free space for it. A move asks energyBefore() (the cached terms, the pair terms
 // counted afresh) and energyAfter() (everything afresh, kept aside); acceptMove() makes the kept
 // values the cache, and a refused move restores the state exactly, so the cache stays right.
 // Between beginSweep() and endSweep() every mutation must belong to such a move; any other
@@ -283,6 +285,12 @@ class Blackboard {
   double tableOwnTerm(const TableHyp& tab) const;
   double tablePairTerms(int32_t id, const Touched& t, double own) const;
   double legOwnTerm(const LegHyp& l) const;
+  // The same own terms with a given negative-evidence term, and with the one cached for the
+  // record's pose (computed and kept with that pose where not: TableHyp::free, LegHyp::free).
+  double tableOwnTerm(const TableHyp& tab, double free) const;
+  double legOwnTerm(const LegHyp& l, double free) const;
+  double cachedTableFree(TableHyp& tab);
+  double cachedLegFree(LegHyp& l);
   double legPairTerms(int32_t id, const Touched& t, double own) const;
   // Cached own and shapelet terms (computed and stored where not cached).
   double cachedTableOwn(int32_t id);

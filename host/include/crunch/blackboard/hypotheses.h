@@ -35,6 +35,13 @@ struct TableHyp {
   // valid while own_gen equals the board's generation.
   double own = 0.0;
   uint64_t own_gen = 0;
+  // Its negative evidence (the four corners' free terms) with the pose and sizes it was read
+  // at: valid while free_gen equals the board's generation and they are this record's (a move
+  // that leaves the table where it was reads no free space; blackboard.cc cachedTableFree).
+  double free = 0.0;
+  uint64_t free_gen = 0;
+  Pose2 free_pose;
+  double free_width = 0.0, free_depth = 0.0, free_leg = 0.0;
 
   // Missing legs m of eq. 24: corners no child occupies.
   // Offset of corner i's leg centre in the table frame (ModelParams::cornerOffset).
@@ -63,6 +70,11 @@ struct LegHyp {
   // valid while own_gen equals the board's generation.
   double own = 0.0;
   uint64_t own_gen = 0;
+  // Its free term with the pose and side it was read at (as TableHyp::free).
+  double free = 0.0;
+  uint64_t free_gen = 0;
+  Pose2 free_pose;
+  double free_side = 0.0;
 };
 
 // A wall (--model walls or rooms only): the finite segment a..b of a flat surface, which causes the
