@@ -81,6 +81,57 @@ Query randomQuery(Rng& rng, const FreeSpaceGrid& g) {
 
 }  // namespace
 
+TEST_CASE("FreeSpace: rays count the cells the reference walk counts, on cell edges too",
+          "[mapping]") {
+  // addRay reads each sample's cell without a division and falls back to the exact arithmetic
+  // near a cell edge: random rays, rays along exact cell edges and corners (cell 0.25 and 0.5:
+  // exact in binary), rays leaving and entering the grid and lying wholly outside must all give
+  // the old walk's counts (test::walkRay), cell for cell.
+  struct Layout {
+    Vec2 lo, hi;
+    double cell;
+  };
+  const Layout layouts[] = {{{0, 0}, {1, 1}, 0.01},
+                            {{-0.37, 0.21}, {0.9, 1.05}, 0.013},
+                            {{0, 0}, {4, 3}, 0.25},
+                            {{-2.0, -1.0}, {2.0, 1.0}, 0.5},
+                            {{150.0, 40.0}, {152.0, 41.0}, 0.01}};
+  Rng rng(27);
+  for (const Layout& l : layouts) {
+    FreeSpaceGrid g(l.lo, l.hi, l.cell);
+    std::vector<int> want(static_cast<size_t>(g.cellsX()) * static_cast<size_t>(g.cellsY()), 0);
+    const Vec2 span = l.hi - l.lo;
+    std::vector<FreeRay> rays;
+    for (int r = 0; r < 400; ++r) {  // random, some starting or ending outside
+      const Vec2 a =
+          l.lo + Vec2{rng.uniform(-0.2, 1.2) * span.x(), rng.uniform(-0.2, 1.2) * span.y()};
+      const double len = rng.uniform(0.0, 0.5 * span.x()), dir = rng.uniform(-kPi, kPi);
+      rays.push_back({a, a + len * Vec2{std::cos(dir), std::sin(dir)}});
+    }
+    for (int k = -1; k <= g.cellsX() + 1; ++k) {  // along cell edges, through cell corners
+      const double x = l.lo.x() + k * l.cell;
+      rays.push_back({{x, l.lo.y() - l.cell}, {x, l.hi.y() + l.cell}});
+      rays.push_back({{x, l.lo.y()}, {x + 3 * l.cell, l.lo.y() + 3 * l.cell}});
+      rays.push_back({{l.lo.x(), l.lo.y() + k * l.cell}, {l.hi.x(), l.lo.y() + k * l.cell}});
+    }
+    rays.push_back({{l.lo.x() - 1.0, l.lo.y() - 1.0}, {l.lo.x() - 0.5, l.lo.y() - 0.2}});
+    for (const FreeRay& r : rays) {
+      g.addRay(r);
+      test::walkRay(g, r, want);
+    }
+    int mismatches = 0, swept = 0;
+    for (int iy = 0; iy < g.cellsY(); ++iy) {
+      for (int ix = 0; ix < g.cellsX(); ++ix) {
+        const int w = want[static_cast<size_t>(iy * g.cellsX() + ix)];
+        mismatches += g.countAt(ix, iy) != w;
+        swept += w > 0;
+      }
+    }
+    CHECK(mismatches == 0);
+    CHECK(swept > g.cellsX());  // the rays covered more than a row
+  }
+}
+
 TEST_CASE("FreeSpace: the look-up equals the brute-force scan over random rays and cores",
           "[mapping]") {
   // Whisker-like rays (a few cm to a metre) pile up into counts of 0..~40; the cores land on

@@ -75,11 +75,34 @@ void FreeSpaceGrid::addRay(const FreeRay& ray) {
   ++rays_;
   const double len = (ray.b - ray.a).norm();
   const int steps = std::max(1, static_cast<int>(std::ceil(len / (0.25 * cell_))));
+  // The samples p_i = a + (b - a) i / steps, each in the cell index() puts it in. Their cell
+  // coordinates are read as q0 + i dq, without a division; that differs from index()'s own
+  // arithmetic by far less than kEdge cells (a few ulp of the arena's extent in cells: 1e-10 for
+  // a 200 m arena at 1 cm), so where it lies kEdge or more from every cell edge it names
+  // index()'s cell, and elsewhere index() decides. The cells are index()'s, bit for bit.
+  constexpr double kEdge = 1e-6;
+  const double inv = 1.0 / cell_;
+  const Vec2 d = ray.b - ray.a;
+  const double qx0 = (ray.a.x() - lo_.x()) * inv, qy0 = (ray.a.y() - lo_.y()) * inv;
+  const double dqx = d.x() * inv / steps, dqy = d.y() * inv / steps;
+  const auto clear = [](double q, int n) {
+    const double frac = q - std::trunc(q);
+    return q >= kEdge && q < n - kEdge && frac >= kEdge && frac <= 1.0 - kEdge;
+  };
   int last_x = -1, last_y = -1;
   for (int i = 0; i <= steps; ++i) {
-    const Vec2 p = ray.a + (ray.b - ray.a) * (static_cast<double>(i) / steps);
+    const double qx = qx0 + i * dqx, qy = qy0 + i * dqy;
     int ix, iy;
-    if (!index(p, ix, iy) || (ix == last_x && iy == last_y)) continue;
+    if (clear(qx, nx_) && clear(qy, ny_)) {
+      ix = static_cast<int>(qx);
+      iy = static_cast<int>(qy);
+    } else if (qx < -kEdge || qy < -kEdge || qx >= nx_ + kEdge || qy >= ny_ + kEdge ||
+               !(qx == qx && qy == qy)) {
+      continue;  // outside the grid (or NaN) by more than the error: index() says so too
+    } else if (!index(ray.a + d * (static_cast<double>(i) / steps), ix, iy)) {
+      continue;
+    }
+    if (ix == last_x && iy == last_y) continue;
     last_x = ix;
     last_y = iy;
     if (value(0, ix, iy) == std::numeric_limits<uint16_t>::max()) continue;
