@@ -76,26 +76,39 @@ void FreeSpaceGrid::addRay(const FreeRay& ray) {
   const double len = (ray.b - ray.a).norm();
   const int steps = std::max(1, static_cast<int>(std::ceil(len / (0.25 * cell_))));
   // The samples p_i = a + (b - a) i / steps, each in the cell index() puts it in. Their cell
-  // coordinates are read as q0 + i dq, without a division; that differs from index()'s own
+  // coordinates are read as q_i = q0 + i dq, without a division; that differs from index()'s own
   // arithmetic by far less than kEdge cells (a few ulp of the arena's extent in cells: 1e-10 for
   // a 200 m arena at 1 cm), so where it lies kEdge or more from every cell edge it names
-  // index()'s cell, and elsewhere index() decides. The cells are index()'s, bit for bit.
+  // index()'s cell, and elsewhere index() decides. q_i is monotone in i on each axis (rounding
+  // is), so when samples i and j are both clear inside one cell, every sample between them is
+  // in it too: a duplicate, skipped. The cells are index()'s, bit for bit, visiting about two
+  // samples per cell crossed instead of four.
   constexpr double kEdge = 1e-6;
   const double inv = 1.0 / cell_;
   const Vec2 d = ray.b - ray.a;
   const double qx0 = (ray.a.x() - lo_.x()) * inv, qy0 = (ray.a.y() - lo_.y()) * inv;
   const double dqx = d.x() * inv / steps, dqy = d.y() * inv / steps;
-  const auto clear = [](double q, int n) {
-    const double frac = q - std::trunc(q);
-    return q >= kEdge && q < n - kEdge && frac >= kEdge && frac <= 1.0 - kEdge;
+  // Whether q lies clear inside cell c of an axis of n cells.
+  const auto clearIn = [](double q, int c) { return q >= c + kEdge && q <= c + 1 - kEdge; };
+  const auto clear = [&](double q, int n, int& c) {
+    if (!(q >= kEdge && q < n - kEdge)) return false;
+    c = static_cast<int>(q);
+    return clearIn(q, c);
+  };
+  // The last sample index whose q on this axis the cell's clear interval still bounds.
+  const auto lastIn = [&](double q0, double dq, int c) {
+    if (dq == 0.0) return steps;
+    const double k = dq > 0 ? (c + 1 - kEdge - q0) / dq : (c + kEdge - q0) / dq;
+    return k >= steps ? steps : static_cast<int>(k);  // k >= the current sample's index >= 0
   };
   int last_x = -1, last_y = -1;
   for (int i = 0; i <= steps; ++i) {
     const double qx = qx0 + i * dqx, qy = qy0 + i * dqy;
     int ix, iy;
-    if (clear(qx, nx_) && clear(qy, ny_)) {
-      ix = static_cast<int>(qx);
-      iy = static_cast<int>(qy);
+    if (clear(qx, nx_, ix) && clear(qy, ny_, iy)) {
+      // Skip to the last sample still clear inside this cell (checked, not trusted).
+      const int j = std::min(lastIn(qx0, dqx, ix), lastIn(qy0, dqy, iy));
+      if (j > i && clearIn(qx0 + j * dqx, ix) && clearIn(qy0 + j * dqy, iy)) i = j;
     } else if (qx < -kEdge || qy < -kEdge || qx >= nx_ + kEdge || qy >= ny_ + kEdge ||
                !(qx == qx && qy == qy)) {
       continue;  // outside the grid (or NaN) by more than the error: index() says so too
