@@ -25,7 +25,8 @@
 #       only this step.
 # (f) keeps its curves.csv (5 MB for 135 runs) in build/results/explore/all/, not in docs/.
 # The raw rows (sweep.csv/json) stay in build/results/; the charts, summary.csv and a copy of
-# sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N] [--only explore]
+# sweep.csv go to docs/img/results/. Usage: bash tools/make-results.sh [--jobs N] [--only explore|charts]
+# (--only charts: (a)-(e) without the exploration step, a few minutes instead of hours.)
 # (CRUNCHHOST_BIN=PATH: run that crunchhost and build nothing.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,7 +36,7 @@ while [[ $# -gt 0 ]]; do
   case "$1" in
     --jobs) JOBS="$2"; shift 2 ;;
     --only) ONLY="$2"; shift 2 ;;
-    *) echo "make-results: unknown argument $1 (--jobs N, --only explore)" >&2; exit 2 ;;
+    *) echo "make-results: unknown argument $1 (--jobs N, --only explore|charts)" >&2; exit 2 ;;
   esac
 done
 
@@ -105,8 +106,8 @@ PY
 if [[ "$ONLY" == "explore" ]]; then
   explore_step
   exit 0
-elif [[ -n "$ONLY" ]]; then
-  echo "make-results: --only takes 'explore'" >&2
+elif [[ -n "$ONLY" && "$ONLY" != "charts" ]]; then
+  echo "make-results: --only takes 'explore' or 'charts'" >&2
   exit 2
 fi
 
@@ -130,5 +131,5 @@ cp "$RAW/snap_hot/snapshot_120.png" "$IMG/snapshot_default_120_hot.png"
     --jobs "$JOBS" --out "$RAW/models"
 "$BIN" sweep-chart --in "$RAW/models" --out "$IMG/models"
 cp "$RAW/models/sweep.csv" "$IMG/models/sweep.csv"
-explore_step
+[[ "$ONLY" == "charts" ]] || explore_step
 echo "make-results: sweeps, scale and charts in $(( $(date +%s) - start )) s; charts in $IMG/"
