@@ -789,6 +789,15 @@ double Blackboard::energyBefore(const Touched& t, std::span<const int32_t> more)
 }
 
 double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) {
+  return energyAfterImpl(t, more, kNone);
+}
+
+double Blackboard::energyAfterBirth(const Touched& t, int32_t born) {
+  return energyAfterImpl(t, {}, born);
+}
+
+double Blackboard::energyAfterImpl(const Touched& t, std::span<const int32_t> more,
+                                   int32_t born) {
   n_kept_tables_ = n_kept_legs_ = n_kept_walls_ = 0;
   kept_slots_.clear();
   if (t.shapelets.overflowed || t.wall_ends.overflowed)
@@ -808,8 +817,21 @@ double Blackboard::energyAfter(const Touched& t, std::span<const int32_t> more) 
     e += legPairTerms(id, t, own);
   }
   const auto keep = [&](int32_t slot) {
-    if (!wm_used_[static_cast<size_t>(slot)]) return 0.0;
-    const double term = shapeletTerm(slot);
+    const auto i = static_cast<size_t>(slot);
+    if (!wm_used_[i]) return 0.0;
+    double term;
+    if (born != kNone && slot_gen_[i] == gen_) {
+      // The cached sum over the causes before the birth, plus the new leg's kernel where
+      // shapeletTerm would count it (within the link radius).
+      term = slot_term_[i];
+      const LegHyp& l = legs_[born];
+      const Shapelet& sh = wm_[i];
+      const double r = shapelet_link_r_;
+      if (l.alive && (l.pose.position() - Vec2{sh.x, sh.y}).squaredNorm() <= r * r)
+        term = logAddExp(term, logShapeletKernelHeld(l, sh, p_, logs_));
+    } else {
+      term = shapeletTerm(slot);
+    }
     assert(kept_slots_.size() < kept_slots_.capacity());
     kept_slots_.push_back({slot, term});
     return term;

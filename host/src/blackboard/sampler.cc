@@ -545,7 +545,7 @@ void Sampler::proposeLegBirth(const Pose2& pose, double side, int32_t parent, do
   const double e0 = bb_.energyBefore(t);
   const int32_t id = bb_.addLeg(pose, side, parent);
   t.legs.add(id);
-  const double e1 = bb_.energyAfter(t);
+  const double e1 = bb_.energyAfterBirth(t, id);
   if (!decide(e1 - e0, beta)) {
     bb_.killLeg(id);
     bb_.releaseLeg(id);

@@ -251,6 +251,12 @@ class Blackboard {
   double energyBefore(const Touched& t, std::span<const int32_t> more = {});
   // localEnergy(t, more) afresh; the own and shapelet terms are kept for acceptMove().
   double energyAfter(const Touched& t, std::span<const int32_t> more = {});
+  // The same for a move whose only change since energyBefore(t) was adding leg `born` (a birth):
+  // each shapelet's noisy-OR sum (eq. 17) gains one cause, so its term is its cached sum with the
+  // new leg's kernel added (log-add, one kernel instead of one per cause), the rest afresh. Equal
+  // to energyAfter(t) up to rounding (the audit's 1e-9); where the cache does not hold a term,
+  // afresh.
+  double energyAfterBirth(const Touched& t, int32_t born);
   // Moves refused because their blanket held more shapelets than kMaxBlanketShapelets.
   long long blanketOverflows() const { return blanket_overflows_; }
   // The state of the last energyAfter() is kept: its terms become the cache.
@@ -301,6 +307,8 @@ class Blackboard {
     if (!in_sweep_) ++gen_;
   }
   double shapeletTerm(int slot) const;
+  // energyAfter's body; `born` as energyAfterBirth's, or kNone.
+  double energyAfterImpl(const Touched& t, std::span<const int32_t> more, int32_t born);
   // Negative evidence at a table's four corners.
   double tableFreeTerm(const TableHyp& table) const;
   // The size priors of the rooms model (0 under the paper's).
