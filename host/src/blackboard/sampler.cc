@@ -348,10 +348,11 @@ Pose2 Sampler::legOnFace(const Shapelet& s, double side) {
   if (opt_.smart_parent) {
     ShapeletSet near;
     bb_.shapeletsNear({s.x, s.y}, near);
+    const double reach2 = 4.0 * side * side;  // (2 side)^2: squared distances, no hypot
     for (int32_t o : near.span()) {
       const Shapelet& so = bb_.shapelet(o);
-      if (!so.oriented || std::abs(wrapPeriod(so.phi - s.phi, kPi)) < kPi / 4) continue;
-      if (std::hypot(so.x - s.x, so.y - s.y) > 2.0 * side) continue;
+      if (!so.oriented || (Vec2{so.x - s.x, so.y - s.y}).squaredNorm() > reach2) continue;
+      if (std::abs(wrapPeriod(so.phi - s.phi, kPi)) < kPi / 4) continue;
       if (partner < 0 || rng_.uniform() < 0.5) partner = o;
     }
   }
