@@ -607,7 +607,9 @@ double Blackboard::legTerms(int32_t id, const Touched& t) const {
   return legPairTerms(id, t, legOwnTerm(l));
 }
 
-double Blackboard::legOwnTerm(const LegHyp& l) const { return legOwnTerm(l, freeTerm(l.pose, l.side)); }
+double Blackboard::legOwnTerm(const LegHyp& l) const {
+  return legOwnTerm(l, freeTerm(l.pose, l.side));
+}
 
 double Blackboard::legOwnTerm(const LegHyp& l, double free) const {
   const bool has_parent = l.parent != kNone;
@@ -720,13 +722,27 @@ double Blackboard::cachedLegOwn(int32_t id) {
   return l.own;
 }
 
+namespace {
+bool samePose(const Pose2& a, const Pose2& b) {
+  return a.x == b.x && a.y == b.y && a.theta == b.theta;
+}
+
+// Whether a record's kept free term is still its own: read in this generation (the grid gains
+// no ray within one) at the pose and sizes it has now.
+bool freeHolds(const TableHyp& t, uint64_t gen) {
+  return t.free_gen == gen && samePose(t.free_pose, t.pose) && t.free_width == t.width &&
+         t.free_depth == t.depth && t.free_leg == t.leg;
+}
+bool freeHolds(const LegHyp& l, uint64_t gen) {
+  return l.free_gen == gen && samePose(l.free_pose, l.pose) && l.free_side == l.side;
+}
+}  // namespace
+
 // A record's free term is a function of its pose and sizes and of the grid (the generation
 // changes with every ray): kept with them, it holds whatever moves came between.
 double Blackboard::cachedTableFree(TableHyp& tab) {
   const Pose2& q = tab.pose;
-  if (tab.free_gen != gen_ || q.x != tab.free_pose.x || q.y != tab.free_pose.y ||
-      q.theta != tab.free_pose.theta || tab.width != tab.free_width ||
-      tab.depth != tab.free_depth || tab.leg != tab.free_leg) {
+  if (!freeHolds(tab, gen_)) {
     tab.free = tableFreeTerm(tab);
     tab.free_gen = gen_;
     tab.free_pose = q;
@@ -739,8 +755,7 @@ double Blackboard::cachedTableFree(TableHyp& tab) {
 
 double Blackboard::cachedLegFree(LegHyp& l) {
   const Pose2& q = l.pose;
-  if (l.free_gen != gen_ || q.x != l.free_pose.x || q.y != l.free_pose.y ||
-      q.theta != l.free_pose.theta || l.side != l.free_side) {
+  if (!freeHolds(l, gen_)) {
     l.free = freeTerm(l.pose, l.side);
     l.free_gen = gen_;
     l.free_pose = q;
@@ -893,19 +908,14 @@ double Blackboard::cacheError() const {
   for (int32_t id = 0; id < tables_.extent(); ++id) {
     const TableHyp& tab = tables_[id];
     if (tab.alive && tab.own_gen == gen_) err = std::max(err, termError(tab.own, tableOwnTerm(tab)));
-    const bool free_kept = tab.free_gen == gen_ && tab.free_pose.x == tab.pose.x &&
-                           tab.free_pose.y == tab.pose.y && tab.free_pose.theta == tab.pose.theta &&
-                           tab.free_width == tab.width && tab.free_depth == tab.depth &&
-                           tab.free_leg == tab.leg;
-    if (tab.alive && free_kept) err = std::max(err, termError(tab.free, tableFreeTerm(tab)));
+    if (tab.alive && freeHolds(tab, gen_))
+      err = std::max(err, termError(tab.free, tableFreeTerm(tab)));
   }
   for (int32_t id = 0; id < legs_.extent(); ++id) {
     const LegHyp& l = legs_[id];
     if (l.alive && l.own_gen == gen_) err = std::max(err, termError(l.own, legOwnTerm(l)));
-    const bool free_kept = l.free_gen == gen_ && l.free_pose.x == l.pose.x &&
-                           l.free_pose.y == l.pose.y && l.free_pose.theta == l.pose.theta &&
-                           l.free_side == l.side;
-    if (l.alive && free_kept) err = std::max(err, termError(l.free, freeTerm(l.pose, l.side)));
+    if (l.alive && freeHolds(l, gen_))
+      err = std::max(err, termError(l.free, freeTerm(l.pose, l.side)));
   }
   for (int32_t id = 0; id < walls_.extent(); ++id) {
     const WallHyp& w = walls_[id];
