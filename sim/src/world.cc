@@ -212,6 +212,21 @@ bool World::candidates(const Vec2& lo, const Vec2& hi, std::span<int> out, int& 
   return true;
 }
 
+void World::collideNear(dxGeom* geom, const Vec2& lo, const Vec2& hi, void* data,
+                        void (*callback)(void*, dxGeom*, dxGeom*)) const {
+  // The margin covers the footprints' rounding; each candidate is then tested exactly by the
+  // callback's dCollide, with `geom` first as dSpaceCollide2(geom, space) passes it.
+  const Vec2 margin{1e-6, 1e-6};
+  std::array<int, 64> near;
+  int n = 0;
+  if (!candidates(lo - margin, hi + margin, near, n)) {
+    dSpaceCollide2(geom, reinterpret_cast<dGeomID>(space_.get()), data, callback);
+    return;
+  }
+  for (int i = 0; i < n; ++i)
+    callback(data, geom, geoms_[static_cast<size_t>(near[static_cast<size_t>(i)])].get());
+}
+
 std::optional<RayHit> World::castRay(Vec2 origin, double heading, double length, double z) const {
   if (!(length > 0.0) || !std::isfinite(length) || !std::isfinite(heading) || !std::isfinite(z) ||
       !origin.allFinite()) {
@@ -222,18 +237,8 @@ std::optional<RayHit> World::castRay(Vec2 origin, double heading, double length,
   dGeomRaySetLength(ray_.get(), length);
 
   RayQuery q;
-  // The geoms near the ray (a margin for the footprints' rounding), each tested exactly by
-  // dCollide as the space would (rayCallback with the ray first); the whole space if too many.
   const Vec2 end = origin + length * dir;
-  const Vec2 margin{1e-6, 1e-6};
-  std::array<int, 64> near;
-  int n_near = 0;
-  if (candidates(origin.cwiseMin(end) - margin, origin.cwiseMax(end) + margin, near, n_near)) {
-    for (int i = 0; i < n_near; ++i)
-      rayCallback(&q, ray_.get(), geoms_[static_cast<size_t>(near[static_cast<size_t>(i)])].get());
-  } else {
-    dSpaceCollide2(ray_.get(), reinterpret_cast<dGeomID>(space_.get()), &q, &rayCallback);
-  }
+  collideNear(ray_.get(), origin.cwiseMin(end), origin.cwiseMax(end), &q, &rayCallback);
   if (!std::isfinite(q.best)) return std::nullopt;
 
   RayHit hit;
@@ -254,16 +259,8 @@ bool World::bodyCollides(const Pose2& pose) const {
   }
   dGeomSetPosition(body_.get(), pose.x, pose.y, kProbeZ);
   bool hit = false;
-  const Vec2 r{kRobotRadius + 1e-6, kRobotRadius + 1e-6};
-  std::array<int, 64> near;
-  int n = 0;
-  if (candidates(pose.position() - r, pose.position() + r, near, n)) {
-    for (int i = 0; i < n && !hit; ++i)
-      overlapCallback(&hit, body_.get(),
-                      geoms_[static_cast<size_t>(near[static_cast<size_t>(i)])].get());
-  } else {
-    dSpaceCollide2(body_.get(), reinterpret_cast<dGeomID>(space_.get()), &hit, &overlapCallback);
-  }
+  const Vec2 r{kRobotRadius, kRobotRadius};
+  collideNear(body_.get(), pose.position() - r, pose.position() + r, &hit, &overlapCallback);
   return hit;
 }
 

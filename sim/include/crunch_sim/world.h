@@ -111,6 +111,11 @@ class World {
   // (the newest first, as dSpaceCollide2 visits them), into `out`; false when more than
   // out.size() do (the caller then asks the whole space).
   bool candidates(const Vec2& lo, const Vec2& hi, std::span<int> out, int& n) const;
+  // What dSpaceCollide2(geom, space) does, through the broad phase: callback(data, geom, box)
+  // for each box whose bounding box meets [lo, hi] (geom's own, with a margin), in the space's
+  // order; the whole space when the candidates overflow.
+  void collideNear(dxGeom* geom, const Vec2& lo, const Vec2& hi, void* data,
+                   void (*callback)(void*, dxGeom*, dxGeom*)) const;
 
   using SpacePtr = std::unique_ptr<dxSpace, detail::SpaceDeleter>;
   using GeomPtr = std::unique_ptr<dxGeom, detail::GeomDeleter>;
