@@ -23,9 +23,11 @@
 // legs, negative evidence and size prior: everything but its pair terms) and each shapelet's
 // noisy-OR term (eq. 17) are cached, and so are each wall's own terms; each table's and leg's
 // negative evidence is kept with the pose it was read at, so a move that leaves a hypothesis in
-// place (a new parent, a sibling moved) reads no free space for it. A move asks energyBefore() (the cached terms, the pair terms
-// counted afresh) and energyAfter() (everything afresh, kept aside); acceptMove() makes the kept
-// values the cache, and a refused move restores the state exactly, so the cache stays right.
+// place (a new parent, a sibling moved) reads no free space for it. A move asks energyBefore()
+// (the cached terms, the pair terms counted afresh) and energyAfter() (everything afresh, kept
+// aside; a birth's shapelet terms, energyAfterBirth(), its cached sums plus the new kernel);
+// acceptMove() makes the kept values the cache, and a refused move restores the state exactly,
+// so the cache stays right.
 // Between beginSweep() and endSweep() every mutation must belong to such a move; any other
 // mutation, a shapelet pushed, or a negative-evidence grid that gained rays invalidates the cache
 // (one generation counter), so callers other than the sampler need not know it exists. The
