@@ -84,10 +84,10 @@ Vec2 boundaryOutward(const WallSpec& w, const Scene& scene) {
   return {0.0, 0.0};
 }
 
-// The grid cell holding coordinate v on an axis starting at `origin` with `cells` cells, clamped
-// to the grid (a query reaching past the boxes' extent meets its border cells only).
 constexpr double kGridCell = 0.5;  // metres: a whisker's ray spans one or two cells
 
+// The grid cell holding coordinate v on an axis starting at `origin` with `cells` cells, clamped
+// to the grid (a query reaching past the boxes' extent meets its border cells only).
 int gridCell(double v, double origin, int cells) {
   const double c = std::floor((v - origin) / kGridCell);
   return static_cast<int>(std::clamp(c, 0.0, static_cast<double>(cells - 1)));

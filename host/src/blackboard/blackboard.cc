@@ -706,20 +706,13 @@ double cachedOwn(Record& r, uint64_t gen, Fresh&& fresh) {
 
 double Blackboard::cachedTableOwn(int32_t id) {
   TableHyp& tab = tables_[id];
-  if (tab.own_gen != gen_) {
-    tab.own = tableOwnTerm(tab, cachedTableFree(tab));
-    tab.own_gen = gen_;
-  }
-  return tab.own;
+  return cachedOwn(tab, gen_,
+                   [&](const TableHyp& t) { return tableOwnTerm(t, cachedTableFree(tab)); });
 }
 
 double Blackboard::cachedLegOwn(int32_t id) {
   LegHyp& l = legs_[id];
-  if (l.own_gen != gen_) {
-    l.own = legOwnTerm(l, cachedLegFree(l));
-    l.own_gen = gen_;
-  }
-  return l.own;
+  return cachedOwn(l, gen_, [&](const LegHyp& r) { return legOwnTerm(r, cachedLegFree(l)); });
 }
 
 namespace {
